@@ -1,0 +1,3 @@
+from dolfinx_friction.cli import main
+
+raise SystemExit(main())

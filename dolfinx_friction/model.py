@@ -1,0 +1,157 @@
+"""The analysis model shared by the scene reader and the Python API.
+
+Plain dataclasses, no dolfinx.  Quantities whose default depends on the mesh
+or on the slave body's material (``K``, ``sigma_inf``, ``stick_slope``) are
+``None`` here and resolved by :meth:`ContactPair.resolved` once the slave
+body is known.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Optional, Sequence, Union
+
+Vector = tuple[float, ...]
+#: A prescribed displacement component: a number, or ``None`` for "free".
+Component = Optional[float]
+
+LAWS = ("linear", "exponential", "tabular", "hard")
+SHAPES = ("plane", "sphere", "cylinder")
+TANGENTS = ("consistent", "calculix")
+
+
+@dataclass(frozen=True)
+class Body:
+    """A deformable, linear elastic, isotropic body: a physical group of cells."""
+
+    name: str
+    E: float
+    nu: float
+    degree: Optional[int] = None  # None: the geometry degree of the mesh
+    plane: str = "strain"  # 2D only: "strain" | "stress"
+    thickness: float = 1.0  # 2D only
+
+
+@dataclass(frozen=True)
+class Rigid:
+    """An analytic rigid obstacle.
+
+    plane: ``point``, ``normal``; sphere (circle in 2D): ``center``, ``radius``;
+    cylinder (3D): ``point``, ``axis``, ``radius``.  The outward normal points
+    towards the deformable body (for a sphere/cylinder: away from the axis).
+    """
+
+    name: str
+    shape: str
+    point: Optional[Vector] = None
+    normal: Optional[Vector] = None
+    center: Optional[Vector] = None
+    axis: Optional[Vector] = None
+    radius: Optional[float] = None
+
+
+@dataclass(frozen=True)
+class ContactPair:
+    """Node-to-surface penalty contact between a slave facet group and a master.
+
+    ``master`` names a facet group or a :class:`Rigid` obstacle.
+    """
+
+    slave: str
+    master: str
+    law: str = "linear"
+    K: Optional[float] = None
+    sigma_inf: Optional[float] = None
+    c0: Optional[float] = None
+    p0: Optional[float] = None
+    table: Optional[tuple[tuple[float, float], ...]] = None  # (pressure, overclosure)
+    mu: float = 0.0
+    stick_slope: Optional[float] = None
+    tangent: str = "consistent"
+    #: Newton iterations per increment in which slave nodes are re-paired;
+    #: later iterations keep the pairing frozen (CalculiX: 8).
+    pairing_iterations: int = 8
+
+    def resolved(self, E_slave: float) -> "ContactPair":
+        """Fill the defaults of contact-theory.md §8 from the slave body's E."""
+        law = "linear" if self.law == "hard" else self.law
+        return replace(
+            self,
+            law=law,
+            K=self.K if self.K is not None else 50.0 * E_slave,
+            sigma_inf=self.sigma_inf if self.sigma_inf is not None else E_slave / 70000.0,
+            c0=self.c0 if self.c0 is not None else (1e-3 if law in ("linear", "tabular") else None),
+            stick_slope=self.stick_slope if self.stick_slope is not None else E_slave / 2.0,
+        )
+
+
+@dataclass(frozen=True)
+class BC:
+    """Prescribed displacement (totals at the end of the step) on a group."""
+
+    on: str
+    u: tuple[Component, ...]
+
+
+@dataclass(frozen=True)
+class Load:
+    """A traction vector or a normal pressure (positive pushes into the body) on a facet group."""
+
+    on: str
+    traction: Optional[Vector] = None
+    pressure: Optional[float] = None
+
+
+@dataclass(frozen=True)
+class RigidMotion:
+    """Rigid obstacle driven by a total translation or a total force at the end of the step."""
+
+    name: str
+    displacement: Optional[Vector] = None
+    force: Optional[Vector] = None
+
+
+@dataclass(frozen=True)
+class Step:
+    name: str
+    increments: int = 1
+    max_cutbacks: int = 6
+    newton_rtol: float = 1e-9
+    newton_atol: float = 1e-10
+    max_iterations: int = 30
+    line_search: bool = False
+    bcs: tuple[BC, ...] = ()
+    loads: tuple[Load, ...] = ()
+    rigid: tuple[RigidMotion, ...] = ()
+
+
+@dataclass(frozen=True)
+class Output:
+    dir: Optional[Path] = None
+    reactions: Optional[tuple[str, ...]] = None  # None: every group carrying a bc
+    fields: bool = True
+    contact_table: bool = True
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A whole analysis: mesh, bodies, obstacles, contact pairs, steps, output."""
+
+    mesh: Union[Path, object]  # a .msh path, or a live gmsh model (the ``gmsh`` module)
+    bodies: tuple[Body, ...]
+    steps: tuple[Step, ...]
+    contacts: tuple[ContactPair, ...] = ()
+    rigids: tuple[Rigid, ...] = ()
+    output: Output = field(default_factory=Output)
+    title: str = ""
+    source: Optional[Path] = None  # the scene file, if read from one
+
+    def rigid(self, name: str) -> Optional[Rigid]:
+        return next((r for r in self.rigids if r.name == name), None)
+
+    def body(self, name: str) -> Optional[Body]:
+        return next((b for b in self.bodies if b.name == name), None)
+
+
+def as_vector(values: Sequence[float]) -> Vector:
+    return tuple(float(v) for v in values)
