@@ -1,0 +1,107 @@
+"""Closest-point projection of slave points onto master faces (contact-theory.md §3.2).
+
+Newton's method on the orthogonality conditions ``c_a = r . q_,a = 0`` is run
+*unconstrained* to machine precision; the result is an interior projection
+when it lies in the face's parametric domain (to ``edge_tol``).  Otherwise
+the projection is reported as clamped: its ``xi`` is the closest point of the
+face found by projected iterations, and ``interior`` is False.  A clamped
+projection is never passed off as an interior one.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dolfinx_friction.contact.shapes import Array, FaceType
+
+EDGE_TOL = 1e-9  # parametric tolerance for "on the face"
+
+
+@dataclass
+class Projection:
+    xi: Array  # (n, fdim) local coordinates of the projection point
+    interior: np.ndarray  # (n,) bool: an orthogonal projection inside the face
+    converged: np.ndarray  # (n,) bool: Newton reached machine precision
+    distance: Array  # (n,) |p - q(xi)|
+
+
+def _geometry(face: FaceType, coords: Array, xi: Array):
+    phi, dphi, d2phi = face.evaluate(xi)
+    q = np.einsum("nk,nkd->nd", phi, coords)
+    qa = np.einsum("nka,nkd->nad", dphi, coords)
+    qab = np.einsum("nkab,nkd->nabd", d2phi, coords)
+    return q, qa, qab
+
+
+def _newton_step(face: FaceType, x: Array, coords: Array, xi: Array):
+    """Newton increment for ``c(xi) = 0``; gradient direction where H is not positive definite."""
+    q, qa, qab = _geometry(face, coords, xi)
+    r = x - q
+    c = np.einsum("nd,nad->na", r, qa)
+    H = np.einsum("nad,nbd->nab", qa, qa) - np.einsum("nd,nabd->nab", r, qab)
+    eig_min = np.linalg.eigvalsh(H)[:, 0]
+    scale = np.einsum("naa->n", np.einsum("nad,nbd->nab", qa, qa))
+    good = eig_min > 1e-12 * scale
+    step = np.empty_like(xi)
+    step[good] = np.linalg.solve(H[good], c[good][..., None])[..., 0]
+    step[~good] = c[~good] / scale[~good, None]
+    return step, 0.5 * np.einsum("nd,nd->n", r, r)
+
+
+def project(face: FaceType, x: Array, coords: Array, xi0: Array | None = None,
+            max_iter: int = 30, edge_tol: float = EDGE_TOL) -> Projection:
+    """Project points ``x`` (n, gdim) onto faces with node coordinates ``coords`` (n, nn, gdim)."""
+    n = len(x)
+    xi = np.tile(face.centroid, (n, 1)) if xi0 is None else np.array(xi0, dtype=float)
+    converged = np.zeros(n, dtype=bool)
+    active = np.arange(n)
+    for _ in range(max_iter):
+        if active.size == 0:
+            break
+        step, f0 = _newton_step(face, x[active], coords[active], xi[active])
+        # damp steps that leave a generous neighbourhood of the face or raise the distance
+        length = np.max(np.abs(step), axis=1)
+        t = np.minimum(1.0, 1.0 / np.maximum(length, 1e-300))
+        trial = xi[active] + t[:, None] * step
+        q, _, _ = _geometry(face, coords[active], trial)
+        f1 = 0.5 * np.sum((x[active] - q) ** 2, axis=1)
+        worse = f1 > f0 * (1 + 1e-12) + 1e-300
+        trial[worse] = xi[active][worse] + 0.5 * t[worse, None] * step[worse]
+        xi[active] = trial
+        # a full Newton step this small leaves an error of its square: round-off
+        done = (length < 1e-10) & ~worse
+        converged[active[done]] = True
+        active = active[~done]
+    outside = face.distance_outside(xi)
+    interior = converged & (outside <= edge_tol)
+    clamped = ~interior
+    if clamped.any():
+        xi[clamped] = _project_clamped(face, x[clamped], coords[clamped], xi[clamped])
+    q, _, _ = _geometry(face, coords, xi)
+    return Projection(xi, interior, converged, np.linalg.norm(x - q, axis=1))
+
+
+def _project_clamped(face: FaceType, x: Array, coords: Array, xi: Array,
+                     max_iter: int = 60) -> Array:
+    """Closest point on the (closed) face by projected gradient iterations with backtracking."""
+    xi = face.clamp(xi)
+    for _ in range(max_iter):
+        q, qa, _ = _geometry(face, coords, xi)
+        r = x - q
+        f0 = 0.5 * np.sum(r * r, axis=1)
+        g = np.einsum("nd,nad->na", r, qa)  # = -grad f
+        scale = np.einsum("nad,nad->n", qa, qa)
+        t = 1.0 / np.maximum(scale, 1e-300)
+        for _ in range(30):
+            trial = face.clamp(xi + t[:, None] * g)
+            qt, _, _ = _geometry(face, coords, trial)
+            ok = 0.5 * np.sum((x - qt) ** 2, axis=1) <= f0
+            if ok.all():
+                break
+            t = np.where(ok, t, 0.5 * t)
+        moved = np.max(np.abs(trial - xi), axis=1)
+        xi = trial
+        if np.all(moved < 1e-14):
+            break
+    return xi
