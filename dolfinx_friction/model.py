@@ -80,7 +80,7 @@ class ContactPair:
             law=law,
             K=self.K if self.K is not None else 50.0 * E_slave,
             sigma_inf=self.sigma_inf if self.sigma_inf is not None else E_slave / 70000.0,
-            c0=self.c0 if self.c0 is not None else (1e-3 if law in ("linear", "tabular") else None),
+            c0=self.c0 if self.c0 is not None else 1e-3,
             stick_slope=self.stick_slope if self.stick_slope is not None else E_slave / 2.0,
         )
 

@@ -1,11 +1,13 @@
 """Closest-point projection of slave points onto master faces (contact-theory.md §3.2).
 
 Newton's method on the orthogonality conditions ``c_a = r . q_,a = 0`` is run
-*unconstrained* to machine precision; the result is an interior projection
-when it lies in the face's parametric domain (to ``edge_tol``).  Otherwise
-the projection is reported as clamped: its ``xi`` is the closest point of the
-face found by projected iterations, and ``interior`` is False.  A clamped
-projection is never passed off as an interior one.
+*unconstrained* to machine precision.  The stationary point is an interior
+projection when it lies in the face's parametric domain (to ``edge_tol``);
+otherwise the point projects off the face (``interior`` is False) and the
+element's derivatives, which assume orthogonality, would not hold on the
+clamped point: a clamped projection is never passed off as an interior one.
+:func:`closest_point` gives the closest point of the closed face for such
+points.
 """
 from __future__ import annotations
 
@@ -20,10 +22,9 @@ EDGE_TOL = 1e-9  # parametric tolerance for "on the face"
 
 @dataclass
 class Projection:
-    xi: Array  # (n, fdim) local coordinates of the projection point
-    interior: np.ndarray  # (n,) bool: an orthogonal projection inside the face
+    xi: Array  # (n, fdim) stationary point of the distance (may lie off the face)
+    interior: np.ndarray  # (n,) bool: converged, and inside the face
     converged: np.ndarray  # (n,) bool: Newton reached machine precision
-    distance: Array  # (n,) |p - q(xi)|
 
 
 def _geometry(face: FaceType, coords: Array, xi: Array):
@@ -73,19 +74,14 @@ def project(face: FaceType, x: Array, coords: Array, xi0: Array | None = None,
         done = (length < 1e-10) & ~worse
         converged[active[done]] = True
         active = active[~done]
-    outside = face.distance_outside(xi)
-    interior = converged & (outside <= edge_tol)
-    clamped = ~interior
-    if clamped.any():
-        xi[clamped] = _project_clamped(face, x[clamped], coords[clamped], xi[clamped])
-    q, _, _ = _geometry(face, coords, xi)
-    return Projection(xi, interior, converged, np.linalg.norm(x - q, axis=1))
+    interior = converged & (face.distance_outside(xi) <= edge_tol)
+    return Projection(xi, interior, converged)
 
 
-def _project_clamped(face: FaceType, x: Array, coords: Array, xi: Array,
-                     max_iter: int = 60) -> Array:
-    """Closest point on the (closed) face by projected gradient iterations with backtracking."""
-    xi = face.clamp(xi)
+def closest_point(face: FaceType, x: Array, coords: Array, xi0: Array | None = None,
+                  max_iter: int = 60) -> Array:
+    """Closest point of the closed face, by projected gradient iterations with backtracking."""
+    xi = face.clamp(np.tile(face.centroid, (len(x), 1)) if xi0 is None else xi0)
     for _ in range(max_iter):
         q, qa, _ = _geometry(face, coords, xi)
         r = x - q

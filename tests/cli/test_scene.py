@@ -1,0 +1,670 @@
+"""Scene files: parsing, defaults, ``--set`` overrides and rejected inputs.
+
+Pure Python (no dolfinx, no MPI): under ``mpirun -n 2`` every rank runs the
+same checks in its own ``tmp_path``.
+"""
+from __future__ import annotations
+
+import copy
+import json
+import math
+import tomllib
+from pathlib import Path
+from typing import Any, Callable
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dolfinx_friction.model import BC, Body, ContactPair, Load, Output, Rigid, RigidMotion, Step
+from dolfinx_friction.scene import (
+    SceneError,
+    apply_override,
+    default_output_dir,
+    load_scene,
+    parse_scene,
+    parse_value,
+)
+
+# The example of scene-format.md, verbatim.
+EXAMPLE = '''\
+title = "elastic block pressed and slid on an elastic foundation"
+
+[mesh]
+file = "block_slide_3d.msh"     # path relative to this scene file; Gmsh .msh 2.2 or 4.1
+
+[[body]]
+name = "block"                  # physical group of cells (3D: volume, 2D: surface)
+E = 200000.0
+nu = 0.3
+
+[[body]]
+name = "foundation"
+E = 200000.0
+nu = 0.3
+
+[[contact]]
+slave = "block_bottom"          # physical group of facets: its nodes are the slave nodes
+master = "foundation_top"       # physical group of facets, or the name of a [[rigid]] obstacle
+law = "linear"                  # linear | exponential | tabular | hard
+K = 1.0e6                       # linear law: pressure per unit overclosure [F/L^3]
+sigma_inf = 2.857               # linear law: tension plateau [F/L^2]
+c0 = 1.0e-3                     # linear law: dimensionless cutoff factor (cutoff = c0*sqrt(A_p))
+mu = 0.3                        # Coulomb coefficient; absent or 0 = frictionless
+stick_slope = 1.0e4             # lambda [F/L^3]; tangential spring K_t = lambda * A_p
+
+[[step]]
+name = "press"
+increments = 1                  # initial number of equal increments
+
+  [[step.bc]]
+  on = "foundation_bottom"
+  u = [0.0, 0.0, 0.0]
+
+  [[step.bc]]
+  on = "block_top"
+  u = [0.0, 0.0, -0.001]
+
+[[step]]
+name = "slide"
+increments = 10
+
+  [[step.bc]]
+  on = "block_top"
+  u = [0.02, 0.0, -0.001]
+
+[output]
+reactions = ["block_top", "foundation_bottom"]
+'''
+
+# A 3D ball (rigid) pressed into a block, then force-controlled.
+RIGID_3D = '''\
+[mesh]
+file = "meshes/ball.msh"
+
+[[body]]
+name = "block"
+E = 1000.0
+nu = 0.25
+
+[[rigid]]
+name = "ball"
+shape = "sphere"
+center = [0.0, 0.0, 1.5]
+radius = 0.5
+
+[[contact]]
+slave = "block_top"
+master = "ball"
+law = "hard"
+mu = 0.2
+
+[[step]]
+  [[step.bc]]
+  on = "block_bottom"
+  u = [0, 0, 0]
+  [[step.rigid]]
+  name = "ball"
+  displacement = [0, 0, -0.01]
+
+[[step]]
+name = "hold"
+increments = 4
+max_cutbacks = 0
+newton_rtol = 1e-8
+newton_atol = 1e-12
+max_iterations = 50
+line_search = true
+  [[step.rigid]]
+  name = "ball"
+  force = [0.0, 0.0, -5.0]
+  [[step.load]]
+  on = "block_side"
+  pressure = 1.5
+'''
+
+# A 2D disk (plane stress) on a rigid floor, exponential law.
+RIGID_2D = '''\
+[mesh]
+file = "disk.MSH"
+
+[[body]]
+name = "disk"
+E = 70.0e3
+nu = 0.33
+plane = "stress"
+thickness = 0.1
+degree = 2
+
+[[rigid]]
+name = "floor"
+shape = "plane"
+point = [0.0, -1.0]
+normal = [0, 1]
+
+[[contact]]
+slave = "disk_edge"
+master = "floor"
+law = "exponential"
+c0 = 1e-3
+p0 = 10.0
+tangent = "calculix"
+pairing_iterations = 1
+
+[[step]]
+name = "drop"
+  [[step.bc]]
+  on = "disk_top"
+  u = ["free", -0.01]
+  [[step.load]]
+  on = "disk_side"
+  traction = [1.0, 0]
+
+[output]
+dir = "../out"
+fields = false
+contact_table = false
+reactions = []
+'''
+
+BASES = {"example": EXAMPLE, "rigid3d": RIGID_3D, "rigid2d": RIGID_2D}
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    return repr(value)
+
+
+def _is_array_of_tables(value: Any) -> bool:
+    return isinstance(value, list) and bool(value) and all(isinstance(v, dict) for v in value)
+
+
+def to_toml(table: dict, prefix: str = "") -> str:
+    """A minimal TOML writer for scene dictionaries (no stdlib writer exists)."""
+    lines = [f"{k} = {_toml_value(v)}" for k, v in table.items()
+             if not isinstance(v, dict) and not _is_array_of_tables(v)]
+    for key, value in table.items():
+        name = f"{prefix}.{key}" if prefix else key
+        if isinstance(value, dict):
+            lines += [f"[{name}]", to_toml(value, name)]
+        elif _is_array_of_tables(value):
+            for item in value:
+                lines += [f"[[{name}]]", to_toml(item, name)]
+    return "\n".join(lines)
+
+
+def write(tmp_path: Path, text: str, name: str = "scene.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def base(name: str) -> dict:
+    return tomllib.loads(BASES[name])
+
+
+def _walk(data: Any, path: str) -> tuple[Any, Any]:
+    *parents, last = [int(p) if p.isdigit() else p for p in path.split(".")]
+    for part in parents:
+        data = data[part]
+    return data, last
+
+
+Edit = Callable[[dict], None]
+
+
+def put(path: str, value: Any) -> Edit:
+    def edit(data: dict) -> None:
+        node, last = _walk(data, path)
+        node[last] = value
+    return edit
+
+
+def drop(path: str) -> Edit:
+    def edit(data: dict) -> None:
+        node, last = _walk(data, path)
+        del node[last]
+    return edit
+
+
+def append(path: str, item: Any) -> Edit:
+    def edit(data: dict) -> None:
+        node, last = _walk(data, path)
+        node.setdefault(last, []).append(item)
+    return edit
+
+
+def rename(path: str, new: str) -> Edit:
+    def edit(data: dict) -> None:
+        node, last = _walk(data, path)
+        node[new] = node.pop(last)
+    return edit
+
+
+def edited(name: str, *edits: Edit) -> dict:
+    data = copy.deepcopy(base(name))
+    for edit in edits:
+        edit(data)
+    return data
+
+
+def assert_one_line(error: SceneError) -> None:
+    assert "\n" not in str(error)
+
+
+# --------------------------------------------------------------------------- valid scenes
+
+
+def test_example_parses_with_defaults(tmp_path):
+    path = write(tmp_path, EXAMPLE)
+    scene = load_scene(path)
+
+    assert scene.title == "elastic block pressed and slid on an elastic foundation"
+    assert scene.mesh == (tmp_path / "block_slide_3d.msh").resolve()
+    assert scene.mesh.is_absolute()
+    assert scene.source == path.resolve()
+    assert scene.bodies == (
+        Body(name="block", E=200000.0, nu=0.3, degree=None, plane="strain", thickness=1.0),
+        Body(name="foundation", E=200000.0, nu=0.3),
+    )
+    assert scene.rigids == ()
+    assert scene.contacts == (
+        ContactPair(slave="block_bottom", master="foundation_top", law="linear", K=1.0e6,
+                    sigma_inf=2.857, c0=1.0e-3, p0=None, table=None, mu=0.3, stick_slope=1.0e4,
+                    tangent="consistent", pairing_iterations=8),
+    )
+    press, slide = scene.steps
+    assert press == Step(
+        name="press", increments=1, max_cutbacks=6, newton_rtol=1e-9, newton_atol=1e-10,
+        max_iterations=30, line_search=False,
+        bcs=(BC("foundation_bottom", (0.0, 0.0, 0.0)), BC("block_top", (0.0, 0.0, -0.001))),
+    )
+    assert slide == Step(name="slide", increments=10, bcs=(BC("block_top", (0.02, 0.0, -0.001)),))
+    assert scene.output == Output(dir=None, reactions=("block_top", "foundation_bottom"),
+                                  fields=True, contact_table=True)
+    assert default_output_dir(scene) == path.resolve().parent / "scene_results"
+
+
+def test_numbers_are_floats(tmp_path):
+    scene = load_scene(write(tmp_path, RIGID_3D))
+    bc = scene.steps[0].bcs[0]
+    assert bc.u == (0.0, 0.0, 0.0) and all(type(c) is float for c in bc.u)
+    assert all(type(c) is float for c in scene.steps[0].rigid[0].displacement)
+
+
+def test_rigid_3d_scene(tmp_path):
+    scene = load_scene(write(tmp_path, RIGID_3D))
+    assert scene.mesh == (tmp_path / "meshes" / "ball.msh").resolve()
+    assert scene.rigids == (Rigid(name="ball", shape="sphere", center=(0.0, 0.0, 1.5), radius=0.5),)
+    assert scene.rigid("ball") is scene.rigids[0]
+    pair = scene.contacts[0]
+    assert (pair.law, pair.mu, pair.K, pair.sigma_inf, pair.c0, pair.stick_slope) == (
+        "hard", 0.2, None, None, None, None)
+    first, hold = scene.steps
+    assert first.name == "step-0"  # default name: step-<index>, first step index 0
+    assert first.rigid == (RigidMotion(name="ball", displacement=(0.0, 0.0, -0.01)),)
+    assert hold == Step(name="hold", increments=4, max_cutbacks=0, newton_rtol=1e-8,
+                        newton_atol=1e-12, max_iterations=50, line_search=True,
+                        loads=(Load(on="block_side", pressure=1.5),),
+                        rigid=(RigidMotion(name="ball", force=(0.0, 0.0, -5.0)),))
+    assert scene.output == Output()
+
+
+def test_default_step_name_uses_the_step_index(tmp_path):
+    data = edited("example", drop("step.1.name"))
+    scene = load_scene(write(tmp_path, to_toml(data)))
+    assert [s.name for s in scene.steps] == ["press", "step-1"]
+
+
+def test_rigid_2d_scene(tmp_path):
+    sub = tmp_path / "scenes"
+    sub.mkdir()
+    path = write(sub, RIGID_2D)
+    scene = load_scene(path)
+    assert scene.mesh == (sub / "disk.MSH").resolve()
+    assert scene.bodies == (Body("disk", 70.0e3, 0.33, degree=2, plane="stress", thickness=0.1),)
+    assert scene.rigids == (Rigid("floor", "plane", point=(0.0, -1.0), normal=(0.0, 1.0)),)
+    assert scene.contacts == (ContactPair("disk_edge", "floor", law="exponential", c0=1e-3, p0=10.0,
+                                          tangent="calculix", pairing_iterations=1),)
+    step = scene.steps[0]
+    assert step.bcs == (BC("disk_top", (None, -0.01)),)
+    assert step.loads == (Load("disk_side", traction=(1.0, 0.0)),)
+    assert scene.output == Output(dir=(tmp_path / "out").resolve(), reactions=(), fields=False,
+                                  contact_table=False)
+    assert default_output_dir(scene) == (tmp_path / "out").resolve()
+
+
+def test_cylinder_and_tabular(tmp_path):
+    data = edited(
+        "rigid3d",
+        put("rigid.0", {"name": "ball", "shape": "cylinder", "point": [0, 0, 2], "axis": [0, 1, 0],
+                        "radius": 1.0}),
+        put("contact.0", {"slave": "block_top", "master": "ball", "law": "tabular", "c0": 2e-3,
+                          "table": [[0, -1e-3], [1e3, 0.0], [5e3, 0.0], [6e3, 2e-3]]}),
+    )
+    scene = load_scene(write(tmp_path, to_toml(data)))
+    assert scene.rigids[0] == Rigid("ball", "cylinder", point=(0.0, 0.0, 2.0), axis=(0.0, 1.0, 0.0),
+                                    radius=1.0)
+    # equal consecutive overclosures are accepted (the law separates them by 1e-10)
+    assert scene.contacts[0].table == ((0.0, -1e-3), (1e3, 0.0), (5e3, 0.0), (6e3, 2e-3))
+    assert scene.contacts[0].c0 == 2e-3  # the cutoff factor applies to every law
+
+
+def test_parse_scene_without_source_keeps_paths():
+    scene = parse_scene(edited("rigid2d"))
+    assert scene.mesh == Path("disk.MSH")
+    assert scene.output.dir == Path("../out")
+    assert scene.source is None
+
+
+def test_default_output_dir_next_to_scene(tmp_path):
+    scene = load_scene(write(tmp_path, RIGID_3D, name="ball_push.toml"))
+    assert default_output_dir(scene) == tmp_path.resolve() / "ball_push_results"
+
+
+# --------------------------------------------------------------------------- --set
+
+
+def test_overrides_of_the_contract(tmp_path):
+    path = write(tmp_path, EXAMPLE)
+    scene = load_scene(path, [
+        "contact.0.mu=0.2",
+        "step.1.increments=20",
+        "body.0.E=1e5",
+        "step.0.bc.1.u=[0,0,-2e-3]",
+        'step.0.bc.0.u.2="free"',
+    ])
+    assert scene.contacts[0].mu == 0.2
+    assert scene.steps[1].increments == 20
+    assert scene.bodies[0].E == 1e5 and scene.bodies[1].E == 200000.0
+    assert scene.steps[0].bcs[1].u == (0.0, 0.0, -2e-3)
+    assert scene.steps[0].bcs[0].u == (0.0, 0.0, None)
+
+
+def test_overrides_bare_strings_absent_keys_and_new_tables(tmp_path):
+    path = write(tmp_path, EXAMPLE)
+    scene = load_scene(path, [
+        "step.0.bc.0.u.2=free",       # bare string
+        "contact.0.law = hard",       # spaces around '=', bare string
+        "contact.0.tangent=calculix",
+        "body.1.degree=2",            # absent key of an existing table
+        "step.0.line_search=true",
+        "output.fields=false",
+        "output.dir=results/run1",
+        "mesh.file=other.msh",
+        "title=a=b",                  # only the first '=' separates
+    ])
+    assert scene.steps[0].bcs[0].u == (0.0, 0.0, None)
+    assert scene.contacts[0].law == "hard" and scene.contacts[0].tangent == "calculix"
+    assert scene.bodies[1].degree == 2
+    assert scene.steps[0].line_search is True
+    assert scene.output.fields is False
+    assert scene.output.dir == (tmp_path / "results" / "run1").resolve()
+    assert scene.mesh == (tmp_path / "other.msh").resolve()
+    assert scene.title == "a=b"
+    # a missing [output] table is created by a dotted key
+    scene = load_scene(write(tmp_path, RIGID_3D, name="r.toml"), ["output.contact_table=false"])
+    assert scene.output.contact_table is False
+
+
+def test_overrides_do_not_touch_the_file(tmp_path):
+    path = write(tmp_path, EXAMPLE)
+    load_scene(path, ["contact.0.mu=0.2"])
+    assert path.read_text(encoding="utf-8") == EXAMPLE
+    assert load_scene(path).contacts[0].mu == 0.3
+
+
+@pytest.mark.parametrize("text, value", [
+    ("0.2", 0.2), ("20", 20), ("1e5", 1e5), ("-3", -3), ("[0,0,-1]", [0, 0, -1]),
+    ('"free"', "free"), ("free", "free"), ("true", True), ("false", False),
+    ('[0, "free", 1.5]', [0, "free", 1.5]), ("block top", "block top"), ("", ""),
+    ("x.msh", "x.msh"), ("1\nother = 2", "1\nother = 2"), ("[1, 2", "[1, 2"),
+])
+def test_parse_value(text, value):
+    assert parse_value(text) == value
+    assert type(parse_value(text)) is type(value)
+
+
+@settings(max_examples=50, deadline=None, database=None)  # no shared files under mpirun
+@given(st.floats(min_value=0, max_value=1e6, allow_nan=False, allow_infinity=False))
+def test_set_roundtrips_any_float(mu):
+    data = edited("example")
+    apply_override(data, f"contact.0.mu={mu!r}")
+    assert parse_scene(data).contacts[0].mu == mu
+
+
+# --------------------------------------------------------------------------- rejected scenes
+
+TWO_D = (put("step.0.bc.0.u", ["free", 0.0]),)
+
+BAD = [
+    # (id, base, edits, fragments the message must contain)
+    ("unknown-top-level-key", "example", [put("colour", "red")], ["colour: unknown key"]),
+    ("unknown-key-in-body", "example", [put("body.1.density", 7.8e-9)], ["body.1.density"]),
+    ("unknown-key-in-bc", "example", [put("step.0.bc.0.value", 1.0)], ["step.0.bc.0.value"]),
+    ("misspelt-stick_slope", "example", [rename("contact.0.stick_slope", "stick_slop")],
+     ["contact.0.stick_slop", "did you mean 'stick_slope'"]),
+    ("title-not-a-string", "example", [put("title", 3)], ["title = 3"]),
+    ("E-as-string", "example", [put("body.0.E", "2e5")], ['body.0.E = "2e5"', "number"]),
+    ("bool-as-number", "example", [put("contact.0.mu", True)], ["contact.0.mu = true"]),
+    ("bool-as-integer", "example", [put("step.0.increments", True)], ["step.0.increments"]),
+    ("E-zero", "example", [put("body.0.E", 0.0)], ["body.0.E = 0.0", "> 0"]),
+    ("E-negative", "example", [put("body.1.E", -1)], ["body.1.E = -1"]),
+    ("E-infinite", "example", [put("body.0.E", math.inf)], ["body.0.E = inf", "finite"]),
+    ("E-missing", "example", [drop("body.0.E")], ["body.0.E", "missing"]),
+    ("nu-half", "example", [put("body.0.nu", 0.5)], ["body.0.nu = 0.5", "< 0.5"]),
+    ("nu-minus-one", "example", [put("body.0.nu", -1.0)], ["body.0.nu = -1.0", "> -1"]),
+    ("plane-unknown", "rigid2d", [put("body.0.plane", "strian")],
+     ["body.0.plane", "did you mean 'strain'"]),
+    ("thickness-zero", "rigid2d", [put("body.0.thickness", 0)], ["body.0.thickness"]),
+    ("degree-3", "example", [put("body.0.degree", 3)], ["body.0.degree = 3"]),
+    ("degree-float", "example", [put("body.0.degree", 1.0)], ["body.0.degree = 1.0"]),
+    ("mu-negative", "example", [put("contact.0.mu", -0.1)], ["contact.0.mu = -0.1: must be >= 0"]),
+    ("K-zero", "example", [put("contact.0.K", 0)], ["contact.0.K = 0"]),
+    ("sigma_inf-negative", "example", [put("contact.0.sigma_inf", -2.0)], ["contact.0.sigma_inf"]),
+    ("stick_slope-zero", "example", [put("contact.0.stick_slope", 0.0)], ["contact.0.stick_slope"]),
+    ("c0-zero", "example", [put("contact.0.c0", 0.0)], ["contact.0.c0"]),
+    ("unknown-law", "example", [put("contact.0.law", "exponental")],
+     ['contact.0.law = "exponental"', "did you mean 'exponential'"]),
+    ("unknown-tangent", "example", [put("contact.0.tangent", "exact")], ["contact.0.tangent"]),
+    ("pairing_iterations-zero", "example", [put("contact.0.pairing_iterations", 0)],
+     ["contact.0.pairing_iterations"]),
+    ("exponential-without-p0", "rigid2d", [drop("contact.0.p0")], ["contact.0.p0", "exponential"]),
+    ("exponential-negative-p0", "rigid2d", [put("contact.0.p0", -1.0)], ["contact.0.p0 = -1.0"]),
+    ("tabular-without-table", "rigid3d", [put("contact.0.law", "tabular")],
+     ["contact.0.table", "required"]),
+    ("tabular-one-pair", "rigid3d", [put("contact.0.law", "tabular"),
+                                     put("contact.0.table", [[0.0, 0.0]])], ["contact.0.table"]),
+    ("tabular-decreasing", "rigid3d", [put("contact.0.law", "tabular"),
+                                       put("contact.0.table", [[0, 0], [1, 2e-3], [2, 1e-3]])],
+     ["contact.0.table.2.1"]),
+    ("tabular-triple", "rigid3d", [put("contact.0.law", "tabular"),
+                                   put("contact.0.table", [[0, 0, 1], [1, 1]])],
+     ["contact.0.table.0"]),
+    ("tabular-string-entry", "rigid3d", [put("contact.0.law", "tabular"),
+                                         put("contact.0.table", [[0, 0], ["1", 1]])],
+     ["contact.0.table.1.0"]),
+    ("slave-equals-master", "example", [put("contact.0.master", "block_bottom")],
+     ['contact.0.master = "block_bottom"']),
+    ("slave-is-a-rigid", "rigid3d", [put("contact.0.slave", "ball"), put("contact.0.master", "x")],
+     ['contact.0.slave = "ball"']),
+    ("contact-missing-master", "example", [drop("contact.0.master")], ["contact.0.master"]),
+    ("duplicate-contact-pair", "example", [append("contact", dict(base("example")["contact"][0]))],
+     ["contact.1", "contact.0"]),
+    ("unknown-shape", "rigid3d", [put("rigid.0.shape", "box")], ['rigid.0.shape = "box"']),
+    ("sphere-without-radius", "rigid3d", [drop("rigid.0.radius")], ["rigid.0.radius", "sphere"]),
+    ("sphere-radius-zero", "rigid3d", [put("rigid.0.radius", 0.0)], ["rigid.0.radius = 0.0"]),
+    ("sphere-with-normal", "rigid3d", [put("rigid.0.normal", [0, 0, 1])], ["rigid.0.normal"]),
+    ("plane-zero-normal", "rigid2d", [put("rigid.0.normal", [0.0, 0.0])],
+     ["rigid.0.normal = [0.0, 0.0]", "zero"]),
+    ("plane-with-radius", "rigid2d", [put("rigid.0.radius", 1.0)], ["rigid.0.radius"]),
+    ("cylinder-zero-axis", "rigid3d", [put("rigid.0.shape", "cylinder"), rename("rigid.0.center",
+                                       "point"), put("rigid.0.axis", [0, 0, 0])], ["rigid.0.axis"]),
+    ("cylinder-in-2d", "rigid2d", [put("rigid.0.shape", "cylinder"), rename("rigid.0.normal",
+                                   "axis"), put("rigid.0.radius", 1.0)], ["rigid.0.shape"]),
+    ("duplicate-rigid-name", "rigid3d", [append("rigid", {"name": "ball", "shape": "plane",
+                                         "point": [0, 0, 0], "normal": [0, 0, 1]})],
+     ['rigid.1.name = "ball"']),
+    ("rigid-vector-length", "rigid3d", [put("rigid.0.center", [0.0, 1.5])],
+     ["rigid.0.center: has 2 components"]),
+    ("u-too-long", "example", [put("step.0.bc.0.u", [0, 0, 0, 0])], ["step.0.bc.0.u"]),
+    ("u-too-short", "example", [put("step.0.bc.0.u", [0])], ["step.0.bc.0.u = [0]"]),
+    ("u-scalar", "example", [put("step.0.bc.0.u", 0.0)], ["step.0.bc.0.u = 0.0"]),
+    ("u-mixed-lengths", "example", [put("step.1.bc.0.u", [0.02, 0.0])],
+     ["step.1.bc.0.u: has 2 components"]),
+    ("u-bad-string", "example", [put("step.0.bc.0.u", [0, "fixed", 0])],
+     ['step.0.bc.0.u.1 = "fixed"', '"free"']),
+    ("u-bool-entry", "example", [put("step.0.bc.0.u", [0, False, 0])], ["step.0.bc.0.u.1 = false"]),
+    ("u-missing", "example", [drop("step.0.bc.0.u")], ["step.0.bc.0.u"]),
+    ("bc-without-group", "example", [drop("step.0.bc.0.on")], ["step.0.bc.0.on"]),
+    ("rigid-vs-bc-lengths", "rigid2d", [put("step.0.bc.0.u", [0, 0, 0])], ["step.0.bc.0.u"]),
+    ("traction-vs-bc-lengths", "rigid2d", [put("step.0.load.0.traction", [1, 0, 0])],
+     ["step.0.load.0.traction"]),
+    ("increments-zero", "example", [put("step.0.increments", 0)], ["step.0.increments = 0"]),
+    ("increments-fraction", "example", [put("step.1.increments", 1.5)],
+     ["step.1.increments = 1.5"]),
+    ("increments-word", "example", [put("step.1.increments", "ten")],
+     ['step.1.increments = "ten"']),
+    ("max_cutbacks-negative", "example", [put("step.0.max_cutbacks", -1)], ["step.0.max_cutbacks"]),
+    ("max_iterations-zero", "example", [put("step.0.max_iterations", 0)],
+     ["step.0.max_iterations"]),
+    ("newton_rtol-zero", "example", [put("step.0.newton_rtol", 0.0)], ["step.0.newton_rtol"]),
+    ("newton_atol-negative", "example", [put("step.0.newton_atol", -1e-10)],
+     ["step.0.newton_atol"]),
+    ("line_search-not-bool", "example", [put("step.0.line_search", 1)], ["step.0.line_search"]),
+    ("duplicate-bc-group", "example", [put("step.0.bc.1.on", "foundation_bottom")],
+     ['step.0.bc.1.on = "foundation_bottom"', "step.0.bc.0"]),
+    ("duplicate-step-name", "example", [put("step.1.name", "press")], ['step.1.name = "press"']),
+    ("explicit-name-clashes-default", "rigid3d", [put("step.1.name", "step-0")], ["step.1.name"]),
+    ("empty-step-name", "example", [put("step.0.name", "")], ["step.0.name"]),
+    ("load-traction-and-pressure", "rigid3d", [put("step.1.load.0.traction", [0, 0, 1])],
+     ["step.1.load.0", "traction", "pressure"]),
+    ("load-neither", "rigid3d", [drop("step.1.load.0.pressure")], ["step.1.load.0"]),
+    ("load-pressure-bool", "rigid3d", [put("step.1.load.0.pressure", False)],
+     ["step.1.load.0.pressure"]),
+    ("step-rigid-unknown", "rigid3d", [put("step.0.rigid.0.name", "bal")],
+     ['step.0.rigid.0.name = "bal"', "did you mean 'ball'"]),
+    ("step-rigid-displacement-and-force", "rigid3d",
+     [put("step.1.rigid.0.displacement", [0, 0, 0])],
+     ["step.1.rigid.0"]),
+    ("step-rigid-twice", "rigid3d", [append("step.0.rigid", {"name": "ball", "force": [0, 0, 1]})],
+     ["step.0.rigid.1.name"]),
+    ("step-rigid-without-rigids", "example", [append("step.0.rigid", {"name": "punch",
+                                              "displacement": [0, 0, 0]})],
+     ["step.0.rigid.0.name"]),
+    ("mesh-missing", "example", [drop("mesh")], ["mesh", "missing"]),
+    ("mesh-file-missing", "example", [drop("mesh.file")], ["mesh.file", "missing"]),
+    ("mesh-file-not-msh", "example", [put("mesh.file", "block.vtk")], ['mesh.file = "block.vtk"']),
+    ("mesh-not-a-table", "example", [put("mesh", "block.msh")], ["mesh"]),
+    ("no-body", "example", [drop("body")], ["body", "missing"]),
+    ("empty-body-list", "example", [put("body", [])], ["body"]),
+    ("body-as-table", "example", [put("body", {"name": "b", "E": 1.0, "nu": 0.3})], ["body"]),
+    ("duplicate-body-name", "example", [put("body.1.name", "block")], ['body.1.name = "block"']),
+    ("no-step", "example", [drop("step")], ["step", "missing"]),
+    ("empty-step-list", "example", [put("step", [])], ["step"]),
+    ("reactions-not-a-list", "example", [put("output.reactions", "block_top")],
+     ["output.reactions"]),
+    ("reactions-number", "example", [put("output.reactions", ["block_top", 3])],
+     ["output.reactions.1"]),
+    ("fields-not-bool", "example", [put("output.fields", "yes")], ["output.fields"]),
+    ("unknown-output-key", "example", [put("output.format", "vtk")], ["output.format"]),
+]
+
+
+@pytest.mark.parametrize("base_name, edits, fragments",
+                         [pytest.param(b, e, f, id=i) for i, b, e, f in BAD])
+def test_bad_scene(tmp_path, base_name, edits, fragments):
+    path = write(tmp_path, to_toml(edited(base_name, *edits)))
+    with pytest.raises(SceneError) as caught:
+        load_scene(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}: ")
+    for fragment in fragments:
+        assert fragment in message
+    assert_one_line(caught.value)
+
+
+def test_enough_distinct_bad_cases():
+    assert len({case[0] for case in BAD}) == len(BAD) >= 35
+
+
+def test_bases_are_valid(tmp_path):
+    for name in BASES:
+        parse_scene(edited(name), source=tmp_path / f"{name}.toml")
+        parse_scene(tomllib.loads(to_toml(edited(name))))  # the test writer round-trips
+
+
+BAD_SETS = [
+    ("no-equals", "contact.0.mu", ["--set contact.0.mu", "KEY=VALUE"]),
+    ("empty-key", "=3", ["--set =3"]),
+    ("empty-segment", "contact..mu=0.2", ["contact..mu"]),
+    ("index-out-of-range", "step.2.increments=20", ["step.2", "out of range"]),
+    ("vector-index-out-of-range", "step.0.bc.0.u.3=0", ["step.0.bc.0.u.3"]),
+    ("negative-index", "contact.-1.mu=0.2", ["contact.-1"]),
+    ("name-as-index", "body.block.E=1e5", ["body.block"]),
+    ("into-a-number", "body.0.E.value=1", ["body.0.E"]),
+    ("missing-array", "rigid.0.radius=1", ["rigid"]),
+    ("unknown-key-validated", "contact.0.muu=0.2", ["contact.0.muu", "did you mean 'mu'"]),
+    ("bad-value-validated", "step.1.increments=0", ["step.1.increments = 0"]),
+    ("bad-free-validated", "step.0.bc.0.u.2=fre", ['step.0.bc.0.u.2 = "fre"']),
+    ("unknown-table-validated", "outptu.fields=false", ["outptu", "did you mean 'output'"]),
+]
+
+
+@pytest.mark.parametrize("assignment, fragments",
+                         [pytest.param(a, f, id=i) for i, a, f in BAD_SETS])
+def test_bad_override(tmp_path, assignment, fragments):
+    path = write(tmp_path, EXAMPLE)
+    with pytest.raises(SceneError) as caught:
+        load_scene(path, [assignment])
+    message = str(caught.value)
+    assert message.startswith(f"{path}: ")
+    for fragment in fragments:
+        assert fragment in message
+    assert_one_line(caught.value)
+
+
+def test_toml_syntax_error_names_file_and_line(tmp_path):
+    lines = EXAMPLE.splitlines()
+    lines[8] = "E = = 200000.0"  # line 9
+    path = write(tmp_path, "\n".join(lines))
+    with pytest.raises(SceneError) as caught:
+        load_scene(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}:9:")
+    assert "TOML" in message
+    assert_one_line(caught.value)
+
+
+def test_duplicate_toml_key_is_a_syntax_error(tmp_path):
+    path = write(tmp_path, EXAMPLE.replace("nu = 0.3\n", "nu = 0.3\nnu = 0.2\n", 1))
+    with pytest.raises(SceneError, match=r"scene\.toml:\d+"):
+        load_scene(path)
+
+
+def test_missing_scene_file(tmp_path):
+    path = tmp_path / "nowhere.toml"
+    with pytest.raises(SceneError, match="nowhere.toml"):
+        load_scene(path)
+
+
+def test_scene_error_is_a_value_error_with_key():
+    with pytest.raises(ValueError, match=r"^contact\.0\.mu = -0\.1: must be >= 0$"):
+        parse_scene(edited("example", put("contact.0.mu", -0.1)))
+    with pytest.raises(SceneError) as caught:
+        parse_scene(edited("example", put("contact.0.mu", -0.1)), source="scene.toml")
+    assert str(caught.value) == "scene.toml: contact.0.mu = -0.1: must be >= 0"
+    assert caught.value.key == "contact.0.mu"
+    assert caught.value.source == "scene.toml"
