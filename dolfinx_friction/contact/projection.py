@@ -67,7 +67,9 @@ def project(face: FaceType, x: Array, coords: Array, xi0: Array | None = None,
         trial = xi[active] + t[:, None] * step
         q, _, _ = _geometry(face, coords[active], trial)
         f1 = 0.5 * np.sum((x[active] - q) ** 2, axis=1)
-        worse = f1 > f0 * (1 + 1e-12) + 1e-300
+        # below the convergence threshold f1 vs f0 compares round-off only (small g_N):
+        # take the full Newton step there, else a sub-ulp half step stalls forever
+        worse = (f1 > f0 * (1 + 1e-12) + 1e-300) & (length >= 1e-10)
         trial[worse] = xi[active][worse] + 0.5 * t[worse, None] * step[worse]
         xi[active] = trial
         # a full Newton step this small leaves an error of its square: round-off

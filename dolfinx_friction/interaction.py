@@ -1,0 +1,219 @@
+"""One contact pair at run time: search, pairing, element evaluation, slave history.
+
+Each rank evaluates the elements of the slave nodes it owns.  Before each
+pairing it receives only the master faces whose bounding boxes meet the
+(inflated) bounding box of its slave nodes; the displacements of their nodes,
+and of the slave nodes, are gathered from the system vector by a PETSc
+scatter.  Forces and tangents go back by global index (ADD).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional, Union
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+from scipy.spatial import cKDTree
+
+from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, ElementResult,
+                                              Kinematics, evaluate, face_kinematics,
+                                              rigid_kinematics)
+from dolfinx_friction.contact.friction import FrictionState
+from dolfinx_friction.model import Rigid
+from dolfinx_friction.surfaces import MasterFaces, SlaveNodes
+
+
+class NodeValues:
+    """Values of a distributed system vector at chosen nodes, gathered from their owners."""
+
+    def __init__(self, template: PETSc.Vec, nodes: np.ndarray, gdim: int):
+        idx = (np.asarray(nodes, dtype=np.int64).reshape(-1, 1) * gdim + np.arange(gdim)).ravel()
+        self.gdim = gdim
+        self.local = PETSc.Vec().createSeq(len(idx), comm=PETSc.COMM_SELF)
+        index_set = PETSc.IS().createGeneral(idx.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        self.scatter = PETSc.Scatter().create(template, index_set, self.local, None)
+
+    def __call__(self, vec: PETSc.Vec) -> np.ndarray:
+        self.scatter.scatter(vec, self.local, addv=PETSc.InsertMode.INSERT,
+                             mode=PETSc.ScatterMode.FORWARD)
+        return self.local.getArray(readonly=True).reshape(-1, self.gdim).copy()
+
+
+@dataclass
+class RigidMaster:
+    """An analytic rigid obstacle whose translation is system node ``node``."""
+
+    rigid: Rigid
+    node: int
+
+    def kinematics(self, X: np.ndarray, u: np.ndarray, U: np.ndarray) -> Kinematics:
+        r = self.rigid
+        return rigid_kinematics(r.shape, X, u, U, point=r.point, normal=r.normal,
+                                center=r.center, axis=r.axis, radius=r.radius or 0.0)
+
+
+@dataclass
+class Elements:
+    """The current elements of a pair: which slaves, which master, and their results."""
+
+    slave: np.ndarray  # indices into the pair's slave nodes
+    face: np.ndarray  # row of the master face in the received face set (-1 for rigid)
+    nodes: np.ndarray  # (n, nodes) system nodes of each element
+    result: Optional[ElementResult] = None
+
+
+class ContactInteraction:
+    """Runtime state of one contact pair on this rank."""
+
+    def __init__(self, comm: MPI.Comm, name: str, params: ContactParameters,
+                 slaves: SlaveNodes, master: Union[MasterFaces, RigidMaster], gdim: int,
+                 pairing_iterations: int = 8):
+        self.comm, self.name, self.params, self.gdim = comm, name, params, gdim
+        self.slaves, self.master = slaves, master
+        self.pairing_iterations = pairing_iterations
+        n = len(slaves.nodes)
+        self.history = FrictionState.zeros(n, gdim)
+        self.in_contact = np.zeros(n, dtype=bool)  # had an element at the last commit
+        self.cutoff = params.law.cutoff(slaves.area)
+        self.elements = Elements(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int))
+        self._faces: Optional[tuple[np.ndarray, np.ndarray]] = None  # received (nodes, X)
+        self._gather: Optional[NodeValues] = None
+        self._slave_gather: Optional[NodeValues] = None
+        self._trial: Optional[FrictionState] = None
+
+    @property
+    def rigid(self) -> bool:
+        return isinstance(self.master, RigidMaster)
+
+    # ------------------------------------------------------------------ search
+    def _exchange_faces(self, u_faces_local: np.ndarray, x_slaves: np.ndarray) -> None:
+        """Receive the master faces near this rank's slave nodes from every rank."""
+        m: MasterFaces = self.master
+        x_faces = m.X + u_faces_local
+        size = _face_size(x_faces)
+        radius = 2.0 * self.comm.allreduce(size.max(initial=0.0), op=MPI.MAX)
+        if len(x_slaves):
+            box = np.stack([x_slaves.min(0) - radius, x_slaves.max(0) + radius])
+        else:
+            box = None
+        boxes = self.comm.allgather(box)
+        lo, hi = x_faces.min(axis=1), x_faces.max(axis=1)
+        outgoing = []
+        for b in boxes:
+            keep = (np.zeros(len(lo), bool) if b is None
+                    else np.all((hi >= b[0]) & (lo <= b[1]), axis=1))
+            outgoing.append((m.nodes[keep], m.X[keep]))
+        incoming = self.comm.alltoall(outgoing)
+        nodes = np.concatenate([f[0] for f in incoming]).reshape(-1, m.face.n_nodes)
+        X = np.concatenate([f[1] for f in incoming]).reshape(-1, m.face.n_nodes, self.gdim)
+        self._faces = (nodes, X)
+        self._radius = radius
+
+    def prepare(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray]) -> None:
+        """(Re)build the gathers for this rank's slave nodes and nearby master faces."""
+        if self._slave_gather is None:
+            self._slave_gather = NodeValues(u, self.slaves.nodes, self.gdim)
+        if self.rigid:
+            if self._gather is None:
+                self._gather = NodeValues(u, np.array([self.master.node]), self.gdim)
+            return
+        x_slaves = self.slaves.X + self._slave_gather(u)
+        self._exchange_faces(u_faces_local, x_slaves)
+        self._gather = NodeValues(u, self._faces[0].ravel(), self.gdim)
+
+    def pair(self, u: PETSc.Vec) -> None:
+        """Pair every slave node with its master (nearest interior projection) within the cutoff."""
+        u_s = self._slave_gather(u)
+        x_s = self.slaves.X + u_s
+        if self.rigid:
+            U = self._gather(u)[0]
+            kin = self.master.kinematics(self.slaves.X, u_s, U)
+            slave = np.flatnonzero(kin.g_N <= self.cutoff)
+            nodes = np.stack([np.full(len(slave), self.master.node), self.slaves.nodes[slave]], 1)
+            self.elements = Elements(slave, np.full(len(slave), -1), nodes)
+            return
+        face_nodes, X_f = self._faces
+        face = self.master.face
+        u_f = self._gather(u).reshape(X_f.shape)
+        x_f = X_f + u_f
+        slave, cand = _candidates(x_s, x_f, self._radius)
+        kin = face_kinematics(face, self.slaves.X[slave], u_s[slave], X_f[cand], u_f[cand])
+        ok = kin.projection.interior & (kin.g_N <= self.cutoff[slave])
+        slave, cand, dist = slave[ok], cand[ok], np.abs(kin.g_N[ok])
+        order = np.lexsort((dist, slave))
+        first = np.unique(slave[order], return_index=True)[1]
+        best = order[first]
+        slave, cand = slave[best], cand[best]
+        nodes = np.concatenate([face_nodes[cand], self.slaves.nodes[slave, None]], axis=1)
+        self.elements = Elements(slave, cand, nodes)
+
+    # -------------------------------------------------------------- evaluation
+    def evaluate(self, u: PETSc.Vec, u_n: PETSc.Vec) -> Elements:
+        """Element forces and tangents at the iterate ``u`` (start of increment ``u_n``)."""
+        el = self.elements
+        s = el.slave
+        X_s = self.slaves.X[s]
+        u_s = self._slave_gather(u)[s]
+        kin = self._kinematics(el, X_s, u_s, u)
+        history = None
+        if self.params.mu > 0.0:
+            history = self.history.take(s)
+            new = ~self.in_contact[s]
+            if new.any():  # first touch: s = 0 against the start-of-increment state
+                kin_n = self._kinematics(el, X_s, self._slave_gather(u_n)[s], u_n)
+                history.w[new] = kin_n.w[new]
+                history.g_T[new] = 0.0
+                history.g_p[new] = 0.0
+        el.result = evaluate(kin, self.slaves.area[s], self.params, history)
+        self._trial = el.result.trial
+        return el
+
+    def _kinematics(self, el: Elements, X_s, u_s, vec: PETSc.Vec) -> Kinematics:
+        if self.rigid:
+            return self.master.kinematics(X_s, u_s, self._gather(vec)[0])
+        _, X_f = self._faces
+        u_f = self._gather(vec).reshape(X_f.shape)[el.face]
+        return face_kinematics(self.master.face, X_s, u_s, X_f[el.face], u_f,
+                               tangent=self.params.tangent)
+
+    # ---------------------------------------------------------------- history
+    def commit(self) -> None:
+        """Make the trial history of the converged increment the new start state."""
+        s = self.elements.slave
+        self.in_contact[:] = False
+        self.in_contact[s] = True
+        if self._trial is not None:
+            fresh = FrictionState.zeros(len(self.in_contact), self.gdim)
+            fresh.put(s, self._trial)
+            self.history = fresh
+
+    def save(self) -> tuple:
+        return self.history.copy(), self.in_contact.copy()
+
+    def restore(self, saved: tuple) -> None:
+        self.history, self.in_contact = saved[0].copy(), saved[1].copy()
+
+    def counts(self) -> tuple[int, int]:
+        """Slave nodes in contact (closed) and in slip, on this rank."""
+        r = self.elements.result
+        if r is None:
+            return 0, 0
+        closed = r.status != OPEN
+        return int(closed.sum()), int((closed & (r.status == SLIP)).sum())
+
+
+def _face_size(x_faces: np.ndarray) -> np.ndarray:
+    """Largest distance of a face node from the face centroid."""
+    c = x_faces.mean(axis=1, keepdims=True)
+    return np.linalg.norm(x_faces - c, axis=2).max(axis=1) if len(x_faces) else np.zeros(0)
+
+
+def _candidates(x_slaves: np.ndarray, x_faces: np.ndarray, radius: float
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """All (slave, face) pairs whose face centroid lies within ``radius`` of the slave."""
+    if len(x_slaves) == 0 or len(x_faces) == 0:
+        return np.zeros(0, int), np.zeros(0, int)
+    pairs = cKDTree(x_slaves).sparse_distance_matrix(
+        cKDTree(x_faces.mean(axis=1)), radius, output_type="ndarray")
+    return pairs["i"].astype(np.int64), pairs["j"].astype(np.int64)

@@ -1,0 +1,319 @@
+"""Load stepping with cutbacks, and Newton's method on the block system.
+
+Each step ramps prescribed displacements, loads and rigid-obstacle motions
+linearly from their values at the start of the step to the step's totals.
+An increment whose Newton iteration fails is halved (up to ``max_cutbacks``
+times) after the displacement and the contact history are rolled back; the
+history is committed only on convergence.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+import numpy as np
+from petsc4py import PETSc
+
+from dolfinx_friction.assembly import CooPattern
+from dolfinx_friction.problem import ContactProblem, ModelError, Timers
+
+DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu",
+                         "pc_factor_mat_solver_type": "mumps"}
+
+
+class ConvergenceError(RuntimeError):
+    """An increment failed after all cutbacks."""
+
+
+@dataclass
+class Increment:
+    """A converged increment, as reported to observers."""
+
+    step: int
+    step_name: str
+    increment: int
+    t: float
+    iterations: int
+    residual: float
+    residuals: list[float]
+    active: int
+    slipping: int
+    wall: float
+    reactions: dict[str, np.ndarray]
+    rigid_u: dict[str, np.ndarray]
+    rigid_f: dict[str, np.ndarray]
+
+
+@dataclass
+class RunSummary:
+    increments: int = 0
+    cutbacks: int = 0
+    newton_iterations: int = 0
+    converged: bool = False
+    timers: Timers = field(default_factory=Timers)
+    failure: str = ""
+
+
+class _Loading:
+    """Prescribed values of one step: constrained rows and ramped external forces."""
+
+    def __init__(self, rows: np.ndarray, u_start, u_end, f_start, f_end):
+        self.rows, self.u_start, self.u_end = rows, u_start, u_end
+        self.f_start, self.f_end = f_start, f_end
+
+    def at(self, tau: float) -> tuple[np.ndarray, np.ndarray]:
+        return (self.u_start + tau * (self.u_end - self.u_start),
+                self.f_start + tau * (self.f_end - self.f_start))
+
+
+class Solver:
+    """Drives a :class:`ContactProblem` through the steps of its scene."""
+
+    def __init__(self, problem: ContactProblem, options_prefix: str = "dolfinx_friction_",
+                 petsc_options: Optional[dict] = None):
+        self.problem = problem
+        p = problem
+        self.comm, self.gdim = p.comm, p.gdim
+        self.timers = Timers()
+        opts = PETSc.Options()
+        for key, value in {**DEFAULT_PETSC_OPTIONS, **(petsc_options or {})}.items():
+            if not opts.hasName(options_prefix + key):
+                opts[options_prefix + key] = value
+        self.ksp = PETSc.KSP().create(p.comm)
+        self.ksp.setOptionsPrefix(options_prefix)
+        self.ksp.setFromOptions()
+        self.u_n = p.u.duplicate()
+        self.R = p.u.duplicate()
+        self.du = p.u.duplicate()
+        self.f_ext = np.zeros(p.layout.n_owned * self.gdim)
+        self._pattern: Optional[CooPattern] = None
+        self._pairs: list = []
+        self._J: Optional[PETSc.Mat] = None
+        self._bc_state: dict[str, tuple] = {}
+        self._load_state: dict[str, tuple] = {}
+        self._rigid_state: dict[str, tuple] = {}
+        self._unit_loads: dict[str, list] = {}
+        self._reaction_rows = {g: p.owned_group_dofs(g) for g in self.reaction_groups()}
+
+    # ------------------------------------------------------------ set-up
+    def reaction_groups(self) -> list[str]:
+        s = self.problem.scene
+        if s.output.reactions is not None:
+            return list(s.output.reactions)
+        seen: dict[str, None] = {}
+        for step in s.steps:
+            seen.update(dict.fromkeys(bc.on for bc in step.bcs))
+        return list(seen)
+
+    def _loads(self, group: str) -> list:
+        if group not in self._unit_loads:
+            from dolfinx_friction import bulk
+            self._unit_loads[group] = [
+                (self.problem.layout.owned_slice(f.block, self.gdim), bulk.unit_loads(f, group))
+                for f in self.problem.group_fields(group)]
+        return self._unit_loads[group]
+
+    def _step_loading(self, index: int) -> _Loading:
+        p, d = self.problem, self.gdim
+        step = p.scene.steps[index]
+        self._bc_state.update({bc.on: bc.u for bc in step.bcs})
+        self._load_state.update({ld.on: (ld.traction, ld.pressure) for ld in step.loads})
+        self._rigid_state.update({r.name: (r.displacement, r.force) for r in step.rigid})
+        # prescribed displacements: sums and counts per dof detect conflicting values
+        n = p.layout.n_owned * d
+        total, total_sq, count = np.zeros(n), np.zeros(n), np.zeros(n)
+        for group, comps in self._bc_state.items():
+            rows = p.owned_group_dofs(group)
+            for c, value in enumerate(comps):
+                if value is not None:
+                    np.add.at(total, rows[:, c], value)
+                    np.add.at(total_sq, rows[:, c], value * value)
+                    np.add.at(count, rows[:, c], 1.0)
+        f_end = np.zeros(n)
+        for rigid in p.scene.rigids:
+            disp, force = self._rigid_state.get(rigid.name, ((0.0,) * d, None))
+            rows = p.rigid_dofs(rigid.name).ravel()
+            if force is not None:
+                f_end[rows] += force
+            else:
+                total[rows] += disp
+                count[rows] += 1.0
+        mean = np.divide(total, count, out=np.zeros(n), where=count > 0)
+        spread = np.divide(total_sq, count, out=np.zeros(n), where=count > 0) - mean ** 2
+        if np.any(spread > 1e-24 * np.maximum(1.0, mean ** 2)):
+            raise ModelError(f"step.{index}: overlapping bc groups prescribe different values "
+                             f"for the same component")
+        for group, (traction, pressure) in self._load_state.items():
+            for owned, unit in self._loads(group):
+                vec = np.zeros(unit.shape[1])
+                if traction is not None:
+                    vec += np.asarray(traction) @ unit[:d]
+                if pressure is not None:
+                    vec += pressure * unit[d]
+                f_end[owned] += vec
+        rows = np.flatnonzero(count > 0)
+        u_start = self.problem.u.getArray(readonly=True)[rows].copy()
+        return _Loading(rows, u_start, mean[rows], self.f_ext.copy(), f_end)
+
+    # -------------------------------------------------------------- run
+    def run(self, on_increment: Optional[Callable[[Increment], None]] = None) -> RunSummary:
+        summary = RunSummary(timers=self.timers)
+        start = time.perf_counter()
+        for index, step in enumerate(self.problem.scene.steps):
+            loading = self._step_loading(index)
+            tau, level, number = 0.0, 0, 0
+            while tau < 1.0 - 1e-12:
+                dtau = min(1.0 / (step.increments * 2 ** level), 1.0 - tau)
+                saved = self._save()
+                ok, iters, residuals = self._newton(step, loading, tau + dtau)
+                summary.newton_iterations += iters
+                if not ok:
+                    self._restore(saved)
+                    level += 1
+                    summary.cutbacks += 1
+                    if level > step.max_cutbacks:
+                        reason = (f"step {index} ({step.name!r}), increment {number + 1} at "
+                                  f"t = {index + tau:.6g}: Newton did not converge after "
+                                  f"{step.max_cutbacks} cutbacks (last residual "
+                                  f"{residuals[-1]:.3e})")
+                        summary.failure = reason
+                        raise ConvergenceError(reason)
+                    continue
+                tau += dtau
+                number += 1
+                for inter in self.problem.interactions:
+                    inter.commit()
+                summary.increments += 1
+                if on_increment is not None:
+                    on_increment(self._report(index, step.name, number, index + tau, iters,
+                                              residuals, time.perf_counter() - start))
+        summary.converged = True
+        return summary
+
+    def _save(self):
+        self.problem.u.copy(self.u_n)
+        return self.f_ext.copy(), [inter.save() for inter in self.problem.interactions]
+
+    def _restore(self, saved) -> None:
+        self.u_n.copy(self.problem.u)
+        self.f_ext = saved[0].copy()
+        for inter, s in zip(self.problem.interactions, saved[1]):
+            inter.restore(s)
+
+    # ------------------------------------------------------------ Newton
+    def _newton(self, step, loading: _Loading, tau: float) -> tuple[bool, int, list[float]]:
+        p = self.problem
+        values, self.f_ext = loading.at(tau)
+        u_local = p.u.getArray()
+        u_local[loading.rows] = values
+        p.u.setArray(u_local)
+        residuals: list[float] = []
+        for it in range(step.max_iterations + 1):
+            norm = self._assemble(it, loading.rows)
+            residuals.append(norm)
+            if not np.isfinite(norm):
+                return False, it, residuals
+            if norm <= max(step.newton_rtol * residuals[0], step.newton_atol):
+                return True, it, residuals
+            if it == step.max_iterations:
+                return False, it, residuals
+            t0 = time.perf_counter()
+            self.ksp.setOperators(self._J)
+            self.ksp.solve(self.R, self.du)
+            self.timers.add("linear_solve", time.perf_counter() - t0)
+            if self.ksp.getConvergedReason() < 0:
+                return False, it + 1, residuals
+            p.u.axpy(-1.0, self.du)
+            if step.line_search:
+                self._line_search(it, loading.rows, norm)
+        return False, step.max_iterations, residuals
+
+    def _line_search(self, it: int, rows: np.ndarray, norm0: float) -> None:
+        """Backtrack along the Newton step while the residual norm does not decrease."""
+        alpha = 1.0
+        for _ in range(5):
+            if self._assemble(it, rows, jacobian=False) <= (1.0 - 1e-4 * alpha) * norm0:
+                return
+            alpha *= 0.5
+            self.problem.u.axpy(alpha, self.du)  # back from u - 2 alpha du to u - alpha du
+
+    def _assemble(self, it: int, bc_rows: np.ndarray, jacobian: bool = True) -> float:
+        """Residual (and Jacobian) at the current iterate; returns the residual norm."""
+        p, d = self.problem, self.gdim
+        t0 = time.perf_counter()
+        p.K_bulk.mult(p.u, self.R)
+        r = self.R.getArray()
+        r -= self.f_ext
+        self.R.setArray(r)
+        self.timers.add("bulk_assembly", time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        pairing = it < max((i.pairing_iterations for i in p.interactions), default=0)
+        if pairing:
+            p.update_fields()
+        rows, cols, vals = [], [], []
+        for k, inter in enumerate(p.interactions):
+            if it < inter.pairing_iterations and jacobian:
+                ts = time.perf_counter()
+                inter.prepare(p.u, p.master_displacements(k))
+                inter.pair(p.u)
+                self.timers.add("contact_search", time.perf_counter() - ts)
+            el = inter.evaluate(p.u, self.u_n)
+            dofs = (el.nodes[:, :, None] * d + np.arange(d)).reshape(len(el.nodes), -1)
+            self.R.setValues(dofs.ravel(), el.result.f.ravel(), addv=PETSc.InsertMode.ADD)
+            if jacobian:
+                nd = dofs.shape[1]
+                rows.append(np.repeat(dofs, nd, axis=1).ravel())
+                cols.append(np.tile(dofs, (1, nd)).ravel())
+                vals.append(el.result.K.ravel())
+        self.R.assemble()
+        self.timers.add("contact_assembly", time.perf_counter() - t0)
+        r = self.R.getArray()
+        self._internal = r + self.f_ext  # for reactions and rigid forces
+        r[bc_rows] = 0.0
+        self.R.setArray(r)
+        if jacobian:
+            t0 = time.perf_counter()
+            self._fill_jacobian(rows, cols, vals, bc_rows)
+            self.timers.add("contact_assembly", time.perf_counter() - t0)
+        return self.R.norm()
+
+    def _fill_jacobian(self, rows, cols, vals, bc_rows) -> None:
+        p = self.problem
+        cat = lambda a: np.concatenate(a) if a else np.zeros(0)  # noqa: E731
+        rows, cols, vals = cat(rows).astype(np.int64), cat(cols).astype(np.int64), cat(vals)
+        pairs = [i.elements.nodes for i in p.interactions]
+        same = (self._pattern is not None and len(pairs) == len(self._pairs)
+                and all(np.array_equal(a, b) for a, b in zip(pairs, self._pairs)))
+        if self.comm.allreduce(0 if same else 1) > 0:
+            self._pattern = CooPattern(self.comm, p.layout.n_owned * self.gdim,
+                                       [(p.bulk_rows, p.bulk_cols), (rows, cols)])
+            self._bulk_data = self._pattern.gather_values(0, p.bulk_vals)
+            if self._J is not None:
+                self._J.destroy()
+            self._J = self._pattern.create_matrix()
+            self._pairs = [a.copy() for a in pairs]
+        data = self._bulk_data + self._pattern.gather_values(1, vals)
+        data[self._pattern.row_slots(bc_rows)] = 0.0
+        data[self._pattern.diagonal_slots[bc_rows]] = 1.0
+        self._pattern.fill(self._J, data)
+
+    # ----------------------------------------------------------- reports
+    def _report(self, index, name, number, t, iters, residuals, wall) -> Increment:
+        p, comm = self.problem, self.comm
+        internal = self._internal
+        # internal minus external force at a node: the force its constraint exerts on the body
+        residual = internal - self.f_ext
+        reactions = {g: comm.allreduce(residual[rows].sum(axis=0) if len(rows) else
+                                       np.zeros(self.gdim))
+                     for g, rows in self._reaction_rows.items()}
+        u = p.u.getArray(readonly=True)
+        rigid_u, rigid_f = {}, {}
+        for rigid in p.scene.rigids:
+            rows = p.rigid_dofs(rigid.name).ravel()
+            rigid_u[rigid.name] = comm.bcast(u[rows].copy() if comm.rank == 0 else None)
+            rigid_f[rigid.name] = comm.bcast(internal[rows].copy() if comm.rank == 0 else None)
+        counts = np.sum([i.counts() for i in p.interactions], axis=0) if p.interactions else (0, 0)
+        active, slipping = (int(c) for c in comm.allreduce(np.asarray(counts)))
+        return Increment(index, name, number, t, iters, residuals[-1], residuals, active,
+                         slipping, wall, reactions, rigid_u, rigid_f)
