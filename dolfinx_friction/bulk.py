@@ -39,16 +39,7 @@ def stiffness_entries(field: BodyField, layout: DofLayout) -> tuple[np.ndarray, 
     indptr, cols, values = A.getValuesCSR()
     A.destroy()
     d = field.gdim
-    im = field.V.dofmap.index_map
-    lo, hi = im.local_range
-    ghosts = np.asarray(im.ghosts, dtype=np.int64)
-    order = np.argsort(ghosts)
-    node = cols.astype(np.int64) // d
-    owned = (node >= lo) & (node < hi)
-    local = np.where(owned, node - lo, 0)
-    g = ~owned
-    local[g] = im.size_local + order[np.searchsorted(ghosts, node[g], sorter=order)]
-    sys_cols = field.nodes[local] * d + cols % d
+    sys_cols = layout.from_block_global(field.block, cols.astype(np.int64) // d) * d + cols % d
     rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
     sys_rows = field.nodes[rows // d] * d + rows % d
     return sys_rows, sys_cols, values

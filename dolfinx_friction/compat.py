@@ -127,7 +127,8 @@ def cell_dofs(V) -> np.ndarray:
     dofs = V.dofmap.list
     if NEW_API:
         return np.asarray(dofs, dtype=np.int64)
-    return dofs.array.reshape(len(dofs.offsets) - 1, -1).astype(np.int64)
+    n = len(dofs.offsets) - 1
+    return dofs.array.reshape(n, dofs.array.size // max(n, 1)).astype(np.int64)
 
 
 def locate_nodes(V, dim: int, entities: np.ndarray) -> np.ndarray:

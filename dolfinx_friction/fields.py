@@ -32,17 +32,21 @@ class DofLayout:
         # what every rank needs to number the ghosts of every block
         table = comm.allgather((self.start, self.block_offsets[:-1].tolist(),
                                 [im.local_range[0] for im in index_maps]))
-        starts = np.array([t[0] for t in table], dtype=np.int64)
-        offsets = np.array([t[1] for t in table], dtype=np.int64)
-        ranges = np.array([t[2] for t in table], dtype=np.int64).reshape(comm.size, -1)
+        self._starts = np.array([t[0] for t in table], dtype=np.int64)
+        self._offsets = np.array([t[1] for t in table], dtype=np.int64)
+        self._ranges = np.array([t[2] for t in table], dtype=np.int64).reshape(comm.size, -1)
         self._nodes = []
         for b, im in enumerate(index_maps):
-            ghosts = np.asarray(im.ghosts, dtype=np.int64)
-            owners = np.asarray(im.owners, dtype=np.int64)
             own = self.start + self.block_offsets[b] + np.arange(im.size_local, dtype=np.int64)
-            ghost = starts[owners] + offsets[owners, b] + (ghosts - ranges[owners, b])
-            self._nodes.append(np.concatenate([own, ghost]))
-        self._rigid_start = int(starts[0] + offsets[0, -1]) if n_rigid else -1
+            ghosts = np.asarray(im.ghosts, dtype=np.int64)
+            self._nodes.append(np.concatenate([own, self.from_block_global(b, ghosts)]))
+        self._rigid_start = int(self._starts[0] + self._offsets[0, -1]) if n_rigid else -1
+
+    def from_block_global(self, block: int, nodes: np.ndarray) -> np.ndarray:
+        """System node index of nodes given by their global index in a body's own numbering."""
+        owner = np.searchsorted(self._ranges[:, block], nodes, side="right") - 1
+        return (self._starts[owner] + self._offsets[owner, block]
+                + (nodes - self._ranges[owner, block]))
 
     def nodes(self, block: int) -> np.ndarray:
         """System node index of every local node (owned, then ghost) of a body block."""

@@ -20,6 +20,8 @@ from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, Ele
                                               Kinematics, evaluate, face_kinematics,
                                               rigid_kinematics)
 from dolfinx_friction.contact.friction import FrictionState
+from dolfinx_friction.contact.projection import project
+from dolfinx_friction.contact.shapes import surface_vector
 from dolfinx_friction.model import Rigid
 from dolfinx_friction.surfaces import MasterFaces, SlaveNodes
 
@@ -60,7 +62,13 @@ class Elements:
     slave: np.ndarray  # indices into the pair's slave nodes
     face: np.ndarray  # row of the master face in the received face set (-1 for rigid)
     nodes: np.ndarray  # (n, nodes) system nodes of each element
+    face_id: np.ndarray  # global number of each element's master face (-1 for rigid)
     result: Optional[ElementResult] = None
+
+
+#: Parametric distance by which a slave node may pass its current face's edge and keep
+#: that face during an increment (hysteresis against switching on faceted masters).
+FACE_SLACK = 0.05
 
 
 class ContactInteraction:
@@ -76,7 +84,8 @@ class ContactInteraction:
         self.history = FrictionState.zeros(n, gdim)
         self.in_contact = np.zeros(n, dtype=bool)  # had an element at the last commit
         self.cutoff = params.law.cutoff(slaves.area)
-        self.elements = Elements(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int))
+        self.elements = Elements(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int),
+                                 np.zeros(0, int))
         self._faces: Optional[tuple[np.ndarray, np.ndarray]] = None  # received (nodes, X)
         self._gather: Optional[NodeValues] = None
         self._slave_gather: Optional[NodeValues] = None
@@ -103,11 +112,12 @@ class ContactInteraction:
         for b in boxes:
             keep = (np.zeros(len(lo), bool) if b is None
                     else np.all((hi >= b[0]) & (lo <= b[1]), axis=1))
-            outgoing.append((m.nodes[keep], m.X[keep]))
+            outgoing.append((m.nodes[keep], m.X[keep], m.ids[keep]))
         incoming = self.comm.alltoall(outgoing)
         nodes = np.concatenate([f[0] for f in incoming]).reshape(-1, m.face.n_nodes)
         X = np.concatenate([f[1] for f in incoming]).reshape(-1, m.face.n_nodes, self.gdim)
         self._faces = (nodes, X)
+        self._face_ids = np.concatenate([f[2] for f in incoming])
         self._radius = radius
 
     def prepare(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray]) -> None:
@@ -122,58 +132,83 @@ class ContactInteraction:
         self._exchange_faces(u_faces_local, x_slaves)
         self._gather = NodeValues(u, self._faces[0].ravel(), self.gdim)
 
-    def pair(self, u: PETSc.Vec) -> None:
-        """Pair every slave node with its master (nearest interior projection) within the cutoff."""
+    def pair(self, u: PETSc.Vec, iteration: int) -> None:
+        """Pair every slave node with its master within the cutoff.
+
+        A slave node takes the nearest face onto which it projects orthogonally.
+        Within an increment (``iteration > 0``) pairing has hysteresis: an element
+        is kept while its node still projects onto the same face (up to
+        :data:`FACE_SLACK` past its edges), even above the cutoff; elements are
+        dropped only at the first pairing of the next increment.
+        """
         u_s = self._slave_gather(u)
         x_s = self.slaves.X + u_s
+        had = np.zeros(len(self.slaves.nodes), dtype=bool)
+        if iteration > 0:
+            had[self.elements.slave] = True
         if self.rigid:
             U = self._gather(u)[0]
             kin = self.master.kinematics(self.slaves.X, u_s, U)
-            slave = np.flatnonzero(kin.g_N <= self.cutoff)
+            slave = np.flatnonzero((kin.g_N <= self.cutoff) | had)
             nodes = np.stack([np.full(len(slave), self.master.node), self.slaves.nodes[slave]], 1)
-            self.elements = Elements(slave, np.full(len(slave), -1), nodes)
+            self.elements = Elements(slave, np.full(len(slave), -1), nodes, np.full(len(slave), -1))
             return
         face_nodes, X_f = self._faces
         face = self.master.face
         u_f = self._gather(u).reshape(X_f.shape)
         x_f = X_f + u_f
         slave, cand = _candidates(x_s, x_f, self._radius)
-        kin = face_kinematics(face, self.slaves.X[slave], u_s[slave], X_f[cand], u_f[cand])
-        ok = kin.projection.interior & (kin.g_N <= self.cutoff[slave])
-        slave, cand, dist = slave[ok], cand[ok], np.abs(kin.g_N[ok])
-        order = np.lexsort((dist, slave))
+        proj = project(face, x_s[slave], x_f[cand])
+        phi, dphi, _ = face.evaluate(proj.xi)
+        r = x_s[slave] - np.einsum("nk,nkd->nd", phi, x_f[cand])
+        m = surface_vector(np.einsum("nka,nkd->nad", dphi, x_f[cand]))
+        g_N = np.einsum("nd,nd->n", r, m) / np.linalg.norm(m, axis=1)
+        previous = np.full(len(self.slaves.nodes), -1, dtype=np.int64)
+        if iteration > 0:
+            previous[self.elements.slave] = self.elements.face_id
+        same = self._face_ids[cand] == previous[slave]
+        on_face = proj.interior | (same & proj.converged
+                                   & (face.distance_outside(proj.xi) <= FACE_SLACK))
+        ok = on_face & ((g_N <= self.cutoff[slave]) | had[slave])
+        slave, cand, dist, same = slave[ok], cand[ok], np.abs(g_N[ok]), same[ok]
+        order = np.lexsort((self._face_ids[cand], dist, ~same, slave))
         first = np.unique(slave[order], return_index=True)[1]
         best = order[first]
         slave, cand = slave[best], cand[best]
         nodes = np.concatenate([face_nodes[cand], self.slaves.nodes[slave, None]], axis=1)
-        self.elements = Elements(slave, cand, nodes)
+        self.elements = Elements(slave, cand, nodes, self._face_ids[cand])
 
     # -------------------------------------------------------------- evaluation
     def evaluate(self, u: PETSc.Vec, u_n: PETSc.Vec) -> Elements:
-        """Element forces and tangents at the iterate ``u`` (start of increment ``u_n``)."""
+        """Element forces and tangents at the iterate ``u`` (start of increment ``u_n``).
+
+        Collective: every rank gathers, whether or not it has elements.
+        """
         el = self.elements
         s = el.slave
         X_s = self.slaves.X[s]
-        u_s = self._slave_gather(u)[s]
-        kin = self._kinematics(el, X_s, u_s, u)
+        kin = self._kinematics(el, X_s, self._slave_gather(u)[s], self._master_values(u))
         history = None
         if self.params.mu > 0.0:
             history = self.history.take(s)
-            new = ~self.in_contact[s]
-            if new.any():  # first touch: s = 0 against the start-of-increment state
-                kin_n = self._kinematics(el, X_s, self._slave_gather(u_n)[s], u_n)
-                history.w[new] = kin_n.w[new]
-                history.g_T[new] = 0.0
-                history.g_p[new] = 0.0
+            kin_n = self._kinematics(el, X_s, self._slave_gather(u_n)[s], self._master_values(u_n))
+            new = ~self.in_contact[s]  # first touch: s = 0 against the start-of-increment state
+            history.w[new] = kin_n.w[new]
+            history.g_T[new] = 0.0
+            history.g_p[new] = 0.0
         el.result = evaluate(kin, self.slaves.area[s], self.params, history)
         self._trial = el.result.trial
         return el
 
-    def _kinematics(self, el: Elements, X_s, u_s, vec: PETSc.Vec) -> Kinematics:
+    def _master_values(self, vec: PETSc.Vec) -> np.ndarray:
+        """Displacements of the master nodes this rank knows (collective)."""
+        return self._gather(vec)
+
+    def _kinematics(self, el: Elements, X_s, u_s, u_master: np.ndarray) -> Kinematics:
         if self.rigid:
-            return self.master.kinematics(X_s, u_s, self._gather(vec)[0])
+            return self.master.kinematics(X_s, u_s, u_master[0])
         _, X_f = self._faces
-        u_f = self._gather(vec).reshape(X_f.shape)[el.face]
+        u_f = u_master.reshape(X_f.shape)[el.face]
         return face_kinematics(self.master.face, X_s, u_s, X_f[el.face], u_f,
                                tangent=self.params.tangent)
 

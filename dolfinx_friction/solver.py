@@ -256,11 +256,12 @@ class Solver:
             if it < inter.pairing_iterations and jacobian:
                 ts = time.perf_counter()
                 inter.prepare(p.u, p.master_displacements(k))
-                inter.pair(p.u)
+                inter.pair(p.u, it)
                 self.timers.add("contact_search", time.perf_counter() - ts)
             el = inter.evaluate(p.u, self.u_n)
-            dofs = (el.nodes[:, :, None] * d + np.arange(d)).reshape(len(el.nodes), -1)
-            self.R.setValues(dofs.ravel(), el.result.f.ravel(), addv=PETSc.InsertMode.ADD)
+            dofs = (el.nodes[:, :, None] * d + np.arange(d)).reshape(len(el.nodes), el.nodes.shape[1] * d)
+            self.R.setValues(dofs.ravel().astype(PETSc.IntType), el.result.f.ravel(),
+                             addv=PETSc.InsertMode.ADD)
             if jacobian:
                 nd = dofs.shape[1]
                 rows.append(np.repeat(dofs, nd, axis=1).ravel())

@@ -66,7 +66,8 @@ def facet_nodes(field: BodyField, facets: np.ndarray) -> tuple[FaceType, np.ndar
     c2f = mesh.topology.connectivity(tdim, tdim - 1)
     facets = np.asarray(facets, dtype=np.int64)
     cells = f2c.array[f2c.offsets[facets]]
-    c2f_rows = c2f.array.reshape(-1, c2f.offsets[1] - c2f.offsets[0])[cells]
+    width = c2f.array.size // max(len(c2f.offsets) - 1, 1)
+    c2f_rows = c2f.array.reshape(-1, max(width, 1))[cells]
     local_facet = np.argmax(c2f_rows == facets[:, None], axis=1)
     nodes = cell_dofs[cells[:, None], _closure_table(field, face)[local_facet]]
     # orient: the normal at the face centre must point away from the cell centre
@@ -95,6 +96,7 @@ class MasterFaces:
 
     face: FaceType
     local: np.ndarray  # (n_faces, nn) local node indices in the master body
+    ids: np.ndarray  # (n_faces,) global face numbers, unique over all ranks
     nodes: np.ndarray  # (n_faces, nn) system node indices
     X: np.ndarray  # (n_faces, nn, gdim) reference coordinates
 
@@ -117,4 +119,7 @@ def slave_nodes(field: BodyField, group: str) -> SlaveNodes:
 def master_faces(field: BodyField, group: str) -> MasterFaces:
     _, facets = field.mesh.groups[group]
     face, nodes = facet_nodes(field, facets)
-    return MasterFaces(face, nodes, field.nodes[nodes], field.X[nodes])
+    comm = field.V.mesh.comm
+    first = comm.scan(len(nodes)) - len(nodes)
+    ids = first + np.arange(len(nodes), dtype=np.int64)
+    return MasterFaces(face, nodes, ids, field.nodes[nodes], field.X[nodes])

@@ -97,7 +97,7 @@ def face_kinematics(face: FaceType, X_slave: Array, u_slave: Array, X_face: Arra
     a = -np.einsum("nad,nbd->nab", qa, qa) + np.einsum("nd,nabd->nab", r, qab)
     b = (phi_e[:, None, :, None] * qa[:, :, None, :]
          - np.transpose(dphi_e, (0, 2, 1))[..., None] * r[:, None, None, :])
-    dxi = np.linalg.solve(a, b.reshape(n, fdim, -1)).reshape(n, fdim, nn + 1, d)
+    dxi = np.linalg.solve(a, b.reshape(n, fdim, (nn + 1) * d)).reshape(n, fdim, nn + 1, d)
 
     # gap vector, surface vector, normal, clearance (§3.6)
     moving_point = np.einsum("nak,nail->nkil", qa, dxi)

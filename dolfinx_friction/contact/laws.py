@@ -77,6 +77,7 @@ class Exponential(Law):
         F, dF = super().normal_force(g_N, area)
         with np.errstate(divide="ignore"):
             capped = self.beta * (-np.asarray(g_N)) > _EXP_CAP - np.log(area * self.p0)
+        capped = capped & (self.p0 >= 1e-30)  # p0 < 1e-30: zero force, never the cap
         return np.where(capped, np.exp(_EXP_CAP), F), np.where(capped, 0.0, dF)
 
     def cutoff(self, area):

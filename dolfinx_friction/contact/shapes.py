@@ -225,5 +225,6 @@ def face_areas(face: FaceType, coords: Array) -> Array:
     _, dphi, _ = face.evaluate(pts)
     tangents = np.einsum("qka,fkd->fqad", dphi, coords)
     n_f, n_q = tangents.shape[:2]
-    m = surface_vector(tangents.reshape(n_f * n_q, face.fdim, -1)).reshape(n_f, n_q, -1)
+    gdim = coords.shape[-1]
+    m = surface_vector(tangents.reshape(n_f * n_q, face.fdim, gdim)).reshape(n_f, n_q, gdim)
     return np.linalg.norm(m, axis=-1) @ wts

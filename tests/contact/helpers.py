@@ -62,10 +62,14 @@ LAWS: dict[str, Law] = {
 WORST: dict[str, float] = {}
 
 
-def record(key: str, value: float) -> float:
-    """Keep the largest value measured under ``key`` (printed at session end)."""
+def record(key: str, value: float, smallest: bool = False) -> float:
+    """Keep the worst value measured under ``key`` (printed at session end): the largest,
+    or with ``smallest`` the smallest (for quantities that must stay large)."""
     value = float(value)
-    WORST[key] = max(WORST.get(key, 0.0), value)
+    if smallest:
+        WORST[key] = min(WORST.get(key, np.inf), value)
+    else:
+        WORST[key] = max(WORST.get(key, 0.0), value)
     return value
 
 
@@ -140,10 +144,7 @@ def flat_faces(face: FaceType, n: int, rng: np.random.Generator, *, affine: bool
         if in_plane_jitter:
             local = local + in_plane_jitter * rng.uniform(-1, 1, local.shape)
         d = GDIM[face.name]
-        if face.fdim == 2:
-            local = np.concatenate([local, np.zeros((len(local), 1))], axis=1)
-        else:
-            local = np.concatenate([local, np.zeros((len(local), 1))], axis=1)
+        local = np.concatenate([local, np.zeros((len(local), 1))], axis=1)  # the plane
         Q = random_rotation(rng, d)
         out.append(local @ Q.T + 0.5 * rng.uniform(-1, 1, d))
     return np.array(out)
@@ -294,7 +295,7 @@ def face_case(face_name: str, law_name: str = "linear", state: str = "frictionle
               seed=0, *, deform: float = 0.05, tangent: str = "consistent",
               g_N: Optional[np.ndarray] = None, law: Optional[Law] = None,
               rigid_master_motion: bool = False, warp: float = 0.15, jitter: float = 0.06,
-              ratio: Optional[np.ndarray] = None) -> Case:
+              ratio: Optional[np.ndarray] = None, history_size: float = 0.01) -> Case:
     """``n`` random elements of one face type in a given law/state.
 
     ``deform``: size of the random master and slave displacements (the
@@ -319,7 +320,7 @@ def face_case(face_name: str, law_name: str = "linear", state: str = "frictionle
                 g_exact=g, tangent=tangent)
     if case.params.mu > 0:
         r = state_ratio(state, n, rng) if ratio is None else np.asarray(ratio, float)
-        case.history = make_history(case, r, rng)
+        case.history = make_history(case, r, rng, size=history_size)
     return case
 
 
@@ -327,12 +328,12 @@ RIGID_SHAPES = ("plane3", "plane2", "sphere", "circle", "cylinder")
 
 
 def rigid_case(shape: str, law_name: str = "linear", state: str = "frictionless", n: int = 8,
-               seed=0, deform: float = 0.05) -> Case:
-    """``n`` slave nodes against one rigid obstacle translated by a per-pair ``U``."""
+               seed=0, deform: float = 0.05, g_N: Optional[np.ndarray] = None) -> Case:
+    """``n`` slave nodes against one rigid obstacle translated by ``U`` (stored per pair)."""
     rng = rng_for("rigid", shape, law_name, state, n, seed)
     d = 2 if shape in ("plane2", "circle") else 3
     U = np.repeat(deform * rng.uniform(-1, 1, (1, d)), n, axis=0)
-    g = clearances(law_name, state, n, rng)
+    g = clearances(law_name, state, n, rng) if g_N is None else np.asarray(g_N, float)
     if shape.startswith("plane"):
         nrm = rng.standard_normal(d)
         nrm /= np.linalg.norm(nrm)
@@ -404,14 +405,3 @@ def fd_error(case: Case, h: float = H, res: Optional[ElementResult] = None) -> n
     res = case.evaluate() if res is None else res
     J = fd_jacobian(case.residual, case.u_e(), h)
     return rel_error(res.K, J)
-
-
-def check_states(case: Case, res: ElementResult, state: str) -> None:
-    """Assert that the batch is in the intended contact state."""
-    from dolfinx_friction.contact.element import OPEN, SLIP, STICK
-
-    expected = {"open": OPEN, "stick": STICK, "slip": SLIP}.get(state)
-    if expected is not None:
-        assert np.all(res.status == expected), res.status
-    if state == "frictionless":
-        assert np.all(res.g_N < 0)
