@@ -51,6 +51,7 @@ class RunSummary:
     cutbacks: int = 0
     newton_iterations: int = 0
     converged: bool = False
+    wall: float = 0.0
     timers: Timers = field(default_factory=Timers)
     failure: str = ""
 
@@ -141,7 +142,8 @@ class Solver:
                 count[rows] += 1.0
         mean = np.divide(total, count, out=np.zeros(n), where=count > 0)
         spread = np.divide(total_sq, count, out=np.zeros(n), where=count > 0) - mean ** 2
-        if np.any(spread > 1e-24 * np.maximum(1.0, mean ** 2)):
+        conflict = np.any(spread > 1e-24 * np.maximum(1.0, mean ** 2))
+        if self.comm.allreduce(int(conflict)):
             raise ModelError(f"step.{index}: overlapping bc groups prescribe different values "
                              f"for the same component")
         for group, (traction, pressure) in self._load_state.items():
@@ -158,7 +160,7 @@ class Solver:
 
     # -------------------------------------------------------------- run
     def run(self, on_increment: Optional[Callable[[Increment], None]] = None) -> RunSummary:
-        summary = RunSummary(timers=self.timers)
+        summary = self.summary = RunSummary(timers=self.timers)
         start = time.perf_counter()
         for index, step in enumerate(self.problem.scene.steps):
             loading = self._step_loading(index)
@@ -178,6 +180,7 @@ class Solver:
                                   f"{step.max_cutbacks} cutbacks (last residual "
                                   f"{residuals[-1]:.3e})")
                         summary.failure = reason
+                        summary.wall = time.perf_counter() - start
                         raise ConvergenceError(reason)
                     continue
                 tau += dtau
@@ -189,6 +192,7 @@ class Solver:
                     on_increment(self._report(index, step.name, number, index + tau, iters,
                                               residuals, time.perf_counter() - start))
         summary.converged = True
+        summary.wall = time.perf_counter() - start
         return summary
 
     def _save(self):

@@ -1,0 +1,67 @@
+"""Run a scene: the entry point shared by the command line and Python scripts."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional, Sequence, Union
+
+from mpi4py import MPI
+
+from dolfinx_friction.model import Scene
+from dolfinx_friction.output import ResultWriter
+from dolfinx_friction.problem import ContactProblem
+from dolfinx_friction.scene import default_output_dir, load_scene
+from dolfinx_friction.solver import ConvergenceError, Increment, RunSummary, Solver
+
+
+@dataclass
+class RunResult:
+    """What a run produced: the solved problem, its increments and where the files are."""
+
+    problem: ContactProblem
+    summary: RunSummary
+    increments: list[Increment]
+    directory: Optional[Path]
+
+
+def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
+        overrides: Sequence[str] = (), quiet: bool = False, write: bool = True,
+        comm: MPI.Comm = MPI.COMM_WORLD, petsc_options: Optional[dict] = None) -> RunResult:
+    """Solve a scene (a :class:`Scene` or a scene file) and write its results.
+
+    ``out`` overrides ``[output] dir``; ``write=False`` keeps everything in memory.
+    Raises :class:`ConvergenceError` (after writing ``summary.json``) when an
+    increment fails after all cutbacks.
+    """
+    start = time.perf_counter()
+    if not isinstance(scene, Scene):
+        scene = load_scene(Path(scene), list(overrides))
+    problem = ContactProblem(scene, comm)
+    solver = Solver(problem, petsc_options=petsc_options)
+    directory = Path(out) if out is not None else (scene.output.dir or default_output_dir(scene))
+    writer = None
+    if write:
+        writer = ResultWriter(problem, solver.reaction_groups(), directory, scene.output.fields,
+                              scene.output.contact_table, quiet)
+    solver.timers.add("setup", time.perf_counter() - start)
+    increments: list[Increment] = []
+
+    def record(inc: Increment) -> None:
+        increments.append(inc)
+        if writer is not None:
+            t0 = time.perf_counter()
+            writer.increment(inc)
+            solver.timers.add("output", time.perf_counter() - t0)
+
+    try:
+        summary = solver.run(record)
+    except ConvergenceError:
+        solver.summary.wall = time.perf_counter() - start
+        if writer is not None:
+            writer.summary(solver.summary)
+        raise
+    summary.wall = time.perf_counter() - start
+    if writer is not None:
+        writer.summary(summary)
+    return RunResult(problem, summary, increments, directory if write else None)

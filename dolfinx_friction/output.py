@@ -1,0 +1,241 @@
+"""Results of a run: history.csv, contact.csv, summary.json and XDMF fields.
+
+Tables are written by rank 0.  Every converged increment is appended in one
+``write`` and flushed to disk (``fsync``) before the next increment starts;
+field files of an increment are written into a scratch folder that is renamed
+into place when complete.  A run killed at any moment therefore leaves the
+increments already converged complete and readable.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import sys
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+from mpi4py import MPI
+
+from dolfinx_friction import compat
+from dolfinx_friction.contact.element import STATUS_NAMES
+from dolfinx_friction.problem import ContactProblem
+from dolfinx_friction.solver import Increment, RunSummary
+
+OUR_FILES = ("history.csv", "contact.csv", "summary.json")
+AXES = "xyz"
+
+
+class OutputError(OSError):
+    """The output directory cannot be prepared or written."""
+
+
+def _append(path: Path, text: str) -> None:
+    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    try:
+        os.write(fd, text.encode())
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    with open(tmp, "rb+") as f:
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def _fmt(values) -> str:
+    return ",".join(f"{v:.17g}" if isinstance(v, float) else str(v) for v in values)
+
+
+class ResultWriter:
+    """Writes the outputs of one run of a :class:`ContactProblem` into ``directory``."""
+
+    def __init__(self, problem: ContactProblem, reaction_groups: list[str], directory: Path,
+                 fields: bool = True, contact_table: bool = True, quiet: bool = False):
+        self.problem, self.comm = problem, problem.comm
+        self.dir = Path(directory)
+        self.fields, self.contact_table, self.quiet = fields, contact_table, quiet
+        self.rank0 = self.comm.rank == 0
+        d = problem.gdim
+        self._prepare_directory()
+        self.history_header = ["step", "increment", "t", "newton_iterations", "residual",
+                               "active", "slipping", "wall_s"]
+        for g in reaction_groups:
+            self.history_header += [f"R_{g}_{a}" for a in AXES[:d]]
+        for r in problem.scene.rigids:
+            self.history_header += [f"U_{r.name}_{a}" for a in AXES[:d]]
+            self.history_header += [f"F_{r.name}_{a}" for a in AXES[:d]]
+        self.reaction_groups = reaction_groups
+        self._node_ids = [self._canonical_ids(i) for i in problem.interactions]
+        offsets = np.cumsum([0] + [len(ids) for ids in self._node_ids])
+        self._node_ids = [ids + off for ids, off in zip(self._node_ids, offsets)]
+        if self.rank0:
+            _append(self.dir / "history.csv", ",".join(self.history_header) + "\n")
+            if contact_table:
+                cols = (["step", "increment", "node"] + list(AXES[:d]) +
+                        ["gap", "pressure", "normal_force"] +
+                        [f"tangential_force_{a}" for a in AXES[:d]] + ["slip", "status"])
+                _append(self.dir / "contact.csv", ",".join(cols) + "\n")
+        if fields:
+            self._field_writer = FieldWriter(problem, self.dir / "fields")
+
+    def _prepare_directory(self) -> None:
+        """Create the directory; results of an earlier run in it are replaced, and said so."""
+        error = None
+        if self.rank0:
+            try:
+                self.dir.mkdir(parents=True, exist_ok=True)
+                old = [self.dir / f for f in OUR_FILES if (self.dir / f).exists()]
+                if (self.dir / "fields").exists():
+                    old.append(self.dir / "fields")
+                if old and not self.quiet:
+                    print(f"overwriting the results of an earlier run in {self.dir}",
+                          file=sys.stderr)
+                for path in old:
+                    shutil.rmtree(path) if path.is_dir() else path.unlink()
+                probe = self.dir / ".write_test"
+                probe.write_text("")
+                probe.unlink()
+            except OSError as exc:
+                error = f"output directory {self.dir}: {exc.strerror or exc}"
+        error = self.comm.bcast(error, root=0)
+        if error:
+            raise OutputError(error)
+
+    def _canonical_ids(self, inter) -> np.ndarray:
+        """Slave node numbers that do not depend on the partition: order of reference coordinates."""
+        X = self.comm.gather(inter.slaves.X, root=0)
+        ids = None
+        if self.rank0:
+            allX = np.concatenate(X)
+            order = np.lexsort(allX.T[::-1])
+            ranks = np.empty(len(allX), dtype=np.int64)
+            ranks[order] = np.arange(len(allX))
+            bounds = np.cumsum([0] + [len(x) for x in X])
+            ids = [ranks[bounds[k]:bounds[k + 1]] for k in range(len(X))]
+        return self.comm.scatter(ids, root=0)
+
+    # ------------------------------------------------------------ per increment
+    def increment(self, inc: Increment) -> None:
+        d = self.problem.gdim
+        if self.contact_table:
+            self._contact_rows(inc)
+        if self.fields:
+            self._field_writer.write(inc)
+        if self.rank0:
+            row = [inc.step, inc.increment, float(inc.t), inc.iterations, float(inc.residual),
+                   inc.active, inc.slipping, float(inc.wall)]
+            for g in self.reaction_groups:
+                row += [float(v) for v in inc.reactions[g][:d]]
+            for r in self.problem.scene.rigids:
+                row += [float(v) for v in inc.rigid_u[r.name]]
+                row += [float(v) for v in inc.rigid_f[r.name]]
+            _append(self.dir / "history.csv", _fmt(row) + "\n")
+            if not self.quiet:
+                print(f"step {inc.step} ({inc.step_name}) increment {inc.increment}: "
+                      f"t = {inc.t:.4f}, {inc.iterations} Newton iterations, residual "
+                      f"{inc.residual:.2e}, {inc.active} in contact, {inc.slipping} slipping",
+                      flush=True)
+
+    def _contact_rows(self, inc: Increment) -> None:
+        blocks = []
+        for inter, ids in zip(self.problem.interactions, self._node_ids):
+            el, r = inter.elements, inter.elements.result
+            s = el.slave
+            area = inter.slaves.area[s]
+            slip = (np.linalg.norm(r.trial.g_p, axis=1) if r.trial is not None
+                    else np.zeros(len(s)))
+            blocks.append(np.column_stack([ids[s], inter.slaves.X[s], r.g_N, r.F_N / area, r.F_N,
+                                           r.F_T, slip, r.status]))
+        width = 3 + 3 * self.problem.gdim + 3
+        local = np.concatenate(blocks) if blocks else np.zeros((0, width))
+        rows = self.comm.gather(local, root=0)
+        if not self.rank0:
+            return
+        table = np.concatenate(rows)
+        table = table[np.argsort(table[:, 0], kind="stable")]
+        lines = []
+        for row in table:
+            values = [inc.step, inc.increment, int(row[0])] + [float(v) for v in row[1:-1]]
+            lines.append(_fmt(values) + "," + STATUS_NAMES[int(row[-1])])
+        _append(self.dir / "contact.csv", "".join(line + "\n" for line in lines))
+
+    # ---------------------------------------------------------------- summary
+    def summary(self, run: RunSummary, extra: Optional[dict] = None) -> None:
+        p = self.problem
+        n_dofs = p.layout.n_global * p.gdim
+        slaves = self.comm.allreduce(sum(len(i.slaves.nodes) for i in p.interactions))
+        if not self.rank0:
+            return
+        scene = p.scene
+        source = scene.source
+        data = {
+            "scene": str(source) if source else None,
+            "scene_sha256": hashlib.sha256(Path(source).read_bytes()).hexdigest()
+            if source else None,
+            "title": scene.title,
+            "versions": compat.versions(),
+            "mpi_ranks": self.comm.size,
+            "dofs": n_dofs,
+            "slave_nodes": slaves,
+            "steps": [s.name for s in scene.steps],
+            "increments": run.increments,
+            "cutbacks": run.cutbacks,
+            "newton_iterations": run.newton_iterations,
+            "wall_time_s": run.wall,
+            "wall_time_per_phase_s": run.timers.phases,
+            "converged": run.converged,
+            "failure": run.failure or None,
+        }
+        data.update(extra or {})
+        _write_atomic(self.dir / "summary.json", json.dumps(data, indent=2) + "\n")
+
+
+class FieldWriter:
+    """Displacement and contact fields of every body, one XDMF file per body and increment."""
+
+    def __init__(self, problem: ContactProblem, directory: Path):
+        self.problem, self.dir = problem, directory
+        if problem.comm.rank == 0:
+            directory.mkdir(parents=True, exist_ok=True)
+        self.outputs = [compat.output_spaces(f) for f in problem.fields]
+
+    def _contact_fields(self, field) -> dict[str, np.ndarray]:
+        """Nodal contact values of a body's slave nodes (owned nodes; 0 elsewhere)."""
+        n, d = len(field.X), self.problem.gdim
+        out = {"contact_pressure": np.zeros((n, 1)), "tangential_traction": np.zeros((n, d)),
+               "slip": np.zeros((n, 1)), "status": np.full((n, 1), -1.0)}
+        for k, inter in enumerate(self.problem.interactions):
+            if self.problem.group_fields(self.problem.scene.contacts[k].slave)[0] is not field:
+                continue
+            el, r = inter.elements, inter.elements.result
+            nodes = inter.slaves.local[el.slave]
+            area = inter.slaves.area[el.slave]
+            out["contact_pressure"][nodes, 0] = r.F_N / area
+            out["tangential_traction"][nodes] = r.F_T / area[:, None]
+            if r.trial is not None:
+                out["slip"][nodes, 0] = np.linalg.norm(r.trial.g_p, axis=1)
+            out["status"][nodes, 0] = r.status
+        return out
+
+    def write(self, inc: Increment) -> None:
+        comm = self.problem.comm
+        name = f"step{inc.step}_increment{inc.increment:04d}"
+        scratch = self.dir / f".{name}.partial"
+        if comm.rank == 0:
+            shutil.rmtree(scratch, ignore_errors=True)
+            scratch.mkdir()
+        comm.barrier()
+        self.problem.update_fields()
+        for field, spaces in zip(self.problem.fields, self.outputs):
+            compat.write_fields(scratch / f"{field.body.name}.xdmf", field, spaces,
+                                self._contact_fields(field), inc.t)
+        comm.barrier()
+        if comm.rank == 0:
+            os.replace(scratch, self.dir / name)
