@@ -135,6 +135,8 @@ class Solver:
         for rigid in p.scene.rigids:
             disp, force = self._rigid_state.get(rigid.name, ((0.0,) * d, None))
             rows = p.rigid_dofs(rigid.name).ravel()
+            if not len(rows):
+                continue
             if force is not None:
                 f_end[rows] += force
             else:

@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# Set everything up (scripts/setup.sh), then run the test suite twice:
+# serially, and under `mpirun -n 2`. Extra arguments go to pytest in both runs
+# (e.g. `bash scripts/test.sh -k friction -x`); if they name test paths, those
+# replace the default `tests` directory.
+#
+# Exits non-zero if either run fails or collects no tests (pytest exit 5).
+# Under MPI only rank 0 prints; the other ranks' output goes to a log file that
+# is shown when that run fails.
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+
+bash scripts/setup.sh
+
+PY="$ROOT/.venv/bin/python"
+export PYTHONNOUSERSITE=1
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# Containers often forbid the cross-memory-attach syscalls Open MPI's shared
+# memory transport tries first; don't let that turn into warnings or failures.
+export OMPI_MCA_btl_vader_single_copy_mechanism="${OMPI_MCA_btl_vader_single_copy_mechanism:-none}"
+# Render with EGL directly (no X server): avoids VTK's "bad X server" warning.
+export VTK_DEFAULT_OPENGL_WINDOW="${VTK_DEFAULT_OPENGL_WINDOW:-vtkEGLRenderWindow}"
+
+# Test location: `tests` unless an extra argument is an existing path.
+targets=(tests)
+for arg in "$@"; do
+    if [[ "$arg" != -* && -e "${arg%%::*}" ]]; then
+        targets=()
+        break
+    fi
+done
+
+describe() {  # describe NAME RC
+    case "$2" in
+        0) echo "test.sh: $1 run passed" ;;
+        5) echo "test.sh: $1 run FAILED: no tests were collected (pytest exit 5)" >&2 ;;
+        *) echo "test.sh: $1 run FAILED (exit code $2)" >&2 ;;
+    esac
+}
+
+echo "test.sh: serial run: pytest -q${targets[*]:+ ${targets[*]}}${*:+ $*}"
+serial_rc=0
+"$PY" -m pytest -q "${targets[@]}" "$@" || serial_rc=$?
+describe serial "$serial_rc"
+
+MPI_LOG_DIR="$(mktemp -d "${TMPDIR:-/tmp}/dolfinx_friction-mpi.XXXXXX")"
+trap 'rm -rf "$MPI_LOG_DIR"' EXIT
+
+echo "test.sh: MPI run: mpirun -n 2 pytest -q -p no:cacheprovider${targets[*]:+ ${targets[*]}}${*:+ $*}"
+mpi_rc=0
+mpirun -n 2 --oversubscribe --bind-to none \
+    -x PYTHONNOUSERSITE -x VTK_DEFAULT_OPENGL_WINDOW \
+    bash -c '
+        log="$1"; shift
+        if [[ "${OMPI_COMM_WORLD_RANK:-0}" == 0 ]]; then
+            exec "$@"
+        else
+            exec "$@" >"$log.rank${OMPI_COMM_WORLD_RANK}" 2>&1
+        fi
+    ' rank-wrapper "$MPI_LOG_DIR/pytest" \
+    "$PY" -m pytest -q -p no:cacheprovider --color=no "${targets[@]}" "$@" || mpi_rc=$?
+if ((mpi_rc != 0)); then
+    for f in "$MPI_LOG_DIR"/pytest.rank*; do
+        [[ -e "$f" ]] || continue
+        echo "----- output of ${f##*.} -----" >&2
+        tail -n 200 "$f" >&2
+    done
+fi
+describe "MPI (2 ranks)" "$mpi_rc"
+
+if ((serial_rc != 0 || mpi_rc != 0)); then
+    exit 1
+fi
+echo "test.sh: all test runs passed"
