@@ -9,8 +9,8 @@ that models the same problem as dolfinx_friction:
   :mod:`dolfinx_friction.gmsh_io`); first-order hexahedra become ``C3D8``
   and tetrahedra ``C3D4``;
 * one element set, material and ``*SOLID SECTION`` per body;
-* a node set for every group that carries a bc, a load or a reaction, made of
-  the group's nodes in every body that contains all of them;
+* a node set for every group that carries a bc or a reaction, made of the
+  group's nodes in every body that contains all of them;
 * an element-face surface (``TYPE=ELEMENT``) for the slave and the master
   group of every contact pair.  The slave surface must be face based: from
   its faces CalculiX computes the representative areas ``A_p`` (a node-based
@@ -25,7 +25,8 @@ that models the same problem as dolfinx_friction:
 * one ``*STEP`` per scene step, ``*STATIC, DIRECT`` with the scene's number of
   equal increments.  In a ``*STATIC`` step CalculiX ramps boundary values and
   loads linearly from their values at the end of the previous step to the new
-  totals, and they persist into later steps, as in the scene;
+  totals, and they persist into later steps, as in the scene (checked: the
+  reactions agree increment by increment with a 2-increment press);
 * ``*NODE PRINT, TOTALS=ONLY`` of ``RF`` on every reaction group: the sum of
   the reaction forces, the same quantity and sign as our reactions -- except
   where a load acts on constrained nodes: CalculiX's ``RF`` is the internal

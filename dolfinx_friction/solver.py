@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction.assembly import CooPattern
@@ -96,6 +97,13 @@ class Solver:
         self._rigid_state: dict[str, tuple] = {}
         self._unit_loads: dict[str, list] = {}
         self._reaction_rows = {g: p.owned_group_dofs(g) for g in self.reaction_groups()}
+        rigid_rows = [p.rigid_dofs(r.name).ravel() for r in p.scene.rigids]
+        self._rigid_rows = np.concatenate(rigid_rows) if rigid_rows else np.zeros(0, int)
+        self._free_rigid_rows = np.zeros(0, dtype=np.int64)
+        diagonal = p.K_bulk.getDiagonal()
+        self._rigid_spring = 1e-12 * self.comm.allreduce(diagonal.norm(PETSc.NormType.INFINITY),
+                                                         op=MPI.MAX)
+        diagonal.destroy()
 
     # ------------------------------------------------------------ set-up
     def reaction_groups(self) -> list[str]:
@@ -157,6 +165,7 @@ class Solver:
                     vec += pressure * unit[d]
                 f_end[owned] += vec
         rows = np.flatnonzero(count > 0)
+        self._free_rigid_rows = np.setdiff1d(self._rigid_rows, rows)
         u_start = self.problem.u.getArray(readonly=True)[rows].copy()
         return _Loading(rows, u_start, mean[rows], self.f_ext.copy(), f_end)
 
@@ -303,6 +312,10 @@ class Solver:
         data = self._bulk_data + self._pattern.gather_values(1, vals)
         data[self._pattern.row_slots(bc_rows)] = 0.0
         data[self._pattern.diagonal_slots[bc_rows]] = 1.0
+        # A force-controlled obstacle may have no stiffness along some axis (a frictionless
+        # plane in its own plane): a tiny spring in the Jacobian only keeps the matrix regular,
+        # the residual, hence the solution, is unchanged.
+        data[self._pattern.diagonal_slots[self._free_rigid_rows]] += self._rigid_spring
         self._pattern.fill(self._J, data)
 
     # ----------------------------------------------------------- reports
