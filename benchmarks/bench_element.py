@@ -487,8 +487,7 @@ def _section(info, scan, best_chunk, rows, warm, rss, prof, whatif) -> str:
                   "`np` for the timing only (restored afterwards); it reproduces K to "
                   f"{whatif['dK']:.1e} relative."]
     lines += ["", "Memory: one evaluation peaks at about 6 kB per pair (tracemalloc), so 10^6 "
-              "pairs in one call would need ~6 GB; chunks of 4,000-30,000 pairs are fastest "
-              "(cache), 10^5-pair chunks lose ~30 %."]
+              "pairs in one call would need ~6 GB. " + _chunk_note(scan)]
     if prof is not None:
         lines += ["", f"Profile of one chunk of {best_chunk} pairs ({prof['total'] * 1e3:.1f} ms): "
                   f"`project` {prof['t_proj'] * 1e3:.1f} ms ({prof['iters']} Newton sweeps from "
@@ -507,6 +506,14 @@ def _section(info, scan, best_chunk, rows, warm, rss, prof, whatif) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _chunk_note(scan) -> str:
+    top = max(scan.values())
+    good = [c for c, r in scan.items() if r >= 0.9 * top]
+    big = max(scan)
+    return (f"Chunks of {min(good):,}-{max(good):,} pairs are within 10 % of the best; "
+            f"{big:,}-pair chunks lose {100 * (1 - scan[big] / top):.0f} % (cache).")
+
+
 SUGGESTIONS = """\
 Why numpy is ~10x short of 5e5 pairs/s, and what would help (element.py and projection.py
 were deliberately not restructured here):
@@ -522,7 +529,7 @@ were deliberately not restructured here):
 2. **`einsum` on tiny batched operands is slow** (no BLAS, generic strided loops):
    `einsum('nkab,nkd->nabd')` / `('nka,nkd->nad')` are 3-5x slower than the equivalent
    batched `matmul`, and the three-operand `einsum('nka,nc,nail->nkcil')` (master-row
-   term of K) alone costs ~1.3 us/pair: contract `dphi @ dxi` first, then take the outer
+   term of K) alone costs 1-2 us/pair: contract `dphi @ dxi` first, then take the outer
    product with `F_p` (4x faster).
 3. **2x2 LAPACK calls**: `eigvalsh` (projection safeguard) and `solve` (Newton step and
    the dxi sensitivities) on stacks of 2x2 matrices are 3-35x slower than closed forms

@@ -67,8 +67,11 @@ class Elements:
 
 
 #: Parametric distance by which a slave node may pass its current face's edge and keep
-#: that face during an increment (hysteresis against switching on faceted masters).
-FACE_SLACK = 0.05
+#: that face during an increment (hysteresis against switching between faces).
+FACE_SLACK = 1e-3
+#: A slave node that projects inside no face (near a convex edge of a faceted master)
+#: takes the nearest face it misses by at most this parametric distance.
+EDGE_SLACK = 0.05
 
 
 class ContactInteraction:
@@ -84,6 +87,8 @@ class ContactInteraction:
         self.history = FrictionState.zeros(n, gdim)
         self.in_contact = np.zeros(n, dtype=bool)  # had an element at the last commit
         self.cutoff = params.law.cutoff(slaves.area)
+        self.initial_gap = np.zeros(n)  # negative clearances found at the first pairing (§3.4)
+        self._first_pairing = True
         self.elements = Elements(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int),
                                  np.zeros(0, int))
         self._faces: Optional[tuple[np.ndarray, np.ndarray]] = None  # received (nodes, X)
@@ -141,6 +146,9 @@ class ContactInteraction:
         :data:`FACE_SLACK` past its edges), even above the cutoff; elements are
         dropped only at the first pairing of the next increment.
         """
+        if iteration == 0:  # areas of the deformed slave faces, once per increment
+            self.slaves.update_areas()
+            self.cutoff = self.params.law.cutoff(self.slaves.area)
         u_s = self._slave_gather(u)
         x_s = self.slaves.X + u_s
         had = np.zeros(len(self.slaves.nodes), dtype=bool)
@@ -152,6 +160,7 @@ class ContactInteraction:
             slave = np.flatnonzero((kin.g_N <= self.cutoff) | had)
             nodes = np.stack([np.full(len(slave), self.master.node), self.slaves.nodes[slave]], 1)
             self.elements = Elements(slave, np.full(len(slave), -1), nodes, np.full(len(slave), -1))
+            self._record_initial_gaps()
             return
         face_nodes, X_f = self._faces
         face = self.master.face
@@ -166,23 +175,38 @@ class ContactInteraction:
         previous = np.full(len(self.slaves.nodes), -1, dtype=np.int64)
         if iteration > 0:
             previous[self.elements.slave] = self.elements.face_id
-        same = self._face_ids[cand] == previous[slave]
-        on_face = proj.interior | (same & proj.converged
-                                   & (face.distance_outside(proj.xi) <= FACE_SLACK))
-        ok = on_face & ((g_N <= self.cutoff[slave]) | had[slave])
-        slave, cand, dist, same = slave[ok], cand[ok], np.abs(g_N[ok]), same[ok]
-        order = np.lexsort((self._face_ids[cand], dist, ~same, slave))
+        outside = np.where(proj.converged, face.distance_outside(proj.xi), np.inf)
+        # preference: the current face (within FACE_SLACK), an interior projection, a near miss
+        rank = np.where(proj.interior, 1, 2)
+        rank[(self._face_ids[cand] == previous[slave]) & (outside <= FACE_SLACK)] = 0
+        ok = (outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave])
+        slave, cand, dist, rank = slave[ok], cand[ok], np.abs(g_N[ok]), rank[ok]
+        order = np.lexsort((self._face_ids[cand], dist, rank, slave))
         first = np.unique(slave[order], return_index=True)[1]
         best = order[first]
         slave, cand = slave[best], cand[best]
         nodes = np.concatenate([face_nodes[cand], self.slaves.nodes[slave, None]], axis=1)
         self.elements = Elements(slave, cand, nodes, self._face_ids[cand])
+        self._record_initial_gaps()
+
+    def _record_initial_gaps(self) -> None:
+        """At the very first pairing, keep the overclosures of the reference configuration."""
+        if not self._first_pairing:
+            return
+        self._first_pairing = False
+        el = self.elements
+        zero = np.zeros((len(el.slave), self.gdim))
+        u_master = np.zeros_like(self._gather.local.getArray()).reshape(-1, self.gdim)
+        g0 = self._kinematics(el, self.slaves.X[el.slave], zero, u_master).g_N
+        self.initial_gap[el.slave] = np.minimum(g0, 0.0)
 
     # -------------------------------------------------------------- evaluation
-    def evaluate(self, u: PETSc.Vec, u_n: PETSc.Vec) -> Elements:
+    def evaluate(self, u: PETSc.Vec, u_n: PETSc.Vec, ramp: float = 0.0) -> Elements:
         """Element forces and tangents at the iterate ``u`` (start of increment ``u_n``).
 
-        Collective: every rank gathers, whether or not it has elements.
+        ``ramp`` is the share ``1 - tau`` of the initial overclosure still removed from
+        the clearance (first static step, contact-theory.md §3.4).  Collective: every
+        rank gathers, whether or not it has elements.
         """
         el = self.elements
         s = el.slave
@@ -196,7 +220,8 @@ class ContactInteraction:
             history.w[new] = kin_n.w[new]
             history.g_T[new] = 0.0
             history.g_p[new] = 0.0
-        el.result = evaluate(kin, self.slaves.area[s], self.params, history)
+        el.result = evaluate(kin, self.slaves.area[s], self.params, history,
+                             gap_offset=-ramp * self.initial_gap[s])
         self._trial = el.result.trial
         return el
 

@@ -21,7 +21,7 @@ from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.fields import BodyField, DofLayout, make_fields
 from dolfinx_friction.interaction import ContactInteraction, RigidMaster
 from dolfinx_friction.model import ContactPair, Scene
-from dolfinx_friction.surfaces import master_faces, slave_nodes
+from dolfinx_friction.surfaces import SlaveNodes, master_faces
 
 
 class ModelError(ValueError):
@@ -148,7 +148,7 @@ class ContactProblem:
         slave_field = self.group_fields(pair.slave)[0]
         pair = pair.resolved(slave_field.body.E)
         params = ContactParameters(make_law(pair), pair.mu, pair.stick_slope, pair.tangent)
-        slaves = slave_nodes(slave_field, pair.slave)
+        slaves = SlaveNodes(slave_field, pair.slave)
         rigid = self.scene.rigid(pair.master)
         if rigid is not None:
             master = RigidMaster(rigid, self.rigid_node(rigid.name))

@@ -60,8 +60,8 @@ class RunSummary:
 class _Loading:
     """Prescribed values of one step: constrained rows and ramped external forces."""
 
-    def __init__(self, rows: np.ndarray, u_start, u_end, f_start, f_end):
-        self.rows, self.u_start, self.u_end = rows, u_start, u_end
+    def __init__(self, rows: np.ndarray, u_start, u_end, f_start, f_end, first: bool):
+        self.rows, self.u_start, self.u_end, self.first = rows, u_start, u_end, first
         self.f_start, self.f_end = f_start, f_end
 
     def at(self, tau: float) -> tuple[np.ndarray, np.ndarray]:
@@ -167,7 +167,7 @@ class Solver:
         rows = np.flatnonzero(count > 0)
         self._free_rigid_rows = np.setdiff1d(self._rigid_rows, rows)
         u_start = self.problem.u.getArray(readonly=True)[rows].copy()
-        return _Loading(rows, u_start, mean[rows], self.f_ext.copy(), f_end)
+        return _Loading(rows, u_start, mean[rows], self.f_ext.copy(), f_end, index == 0)
 
     # -------------------------------------------------------------- run
     def run(self, on_increment: Optional[Callable[[Increment], None]] = None) -> RunSummary:
@@ -220,6 +220,7 @@ class Solver:
     def _newton(self, step, loading: _Loading, tau: float) -> tuple[bool, int, list[float]]:
         p = self.problem
         values, self.f_ext = loading.at(tau)
+        self._ramp = (1.0 - tau) if loading.first else 0.0
         u_local = p.u.getArray()
         u_local[loading.rows] = values
         p.u.setArray(u_local)
@@ -273,7 +274,7 @@ class Solver:
                 inter.prepare(p.u, p.master_displacements(k))
                 inter.pair(p.u, it)
                 self.timers.add("contact_search", time.perf_counter() - ts)
-            el = inter.evaluate(p.u, self.u_n)
+            el = inter.evaluate(p.u, self.u_n, self._ramp)
             dofs = (el.nodes[:, :, None] * d + np.arange(d)).reshape(len(el.nodes), el.nodes.shape[1] * d)
             self.R.setValues(dofs.ravel().astype(PETSc.IntType), el.result.f.ravel(),
                              addv=PETSc.InsertMode.ADD)

@@ -80,14 +80,33 @@ def facet_nodes(field: BodyField, facets: np.ndarray) -> tuple[FaceType, np.ndar
     return face, nodes
 
 
-@dataclass
 class SlaveNodes:
-    """The owned slave nodes of a contact pair on this rank."""
+    """The owned slave nodes of a contact pair on this rank, with their areas ``A_p``.
 
-    local: np.ndarray  # local node indices in the slave body
-    nodes: np.ndarray  # system node indices
-    X: np.ndarray  # (n, gdim) reference coordinates
-    area: np.ndarray  # (n,) representative areas A_p (thickness included in 2D)
+    ``A_p = sum_f w_p,f A_f`` over the slave faces around the node
+    (contact-theory.md §2.1), thickness included in 2D; :meth:`update_areas`
+    recomputes it on the deformed faces (collective).
+    """
+
+    def __init__(self, field: BodyField, group: str):
+        self.field = field
+        self.face, self._facet_nodes = facet_nodes(field, field.mesh.groups[group][1])
+        marks = np.ones((self._facet_nodes.size, field.gdim))
+        owned = np.flatnonzero(field.to_owners(self._facet_nodes.ravel(), marks)[:, 0] > 0)
+        self.local = owned  # local node indices in the slave body
+        self.nodes = field.nodes[owned]  # system node indices
+        self.X = field.X[owned]  # (n, gdim) reference coordinates
+        self.update_areas()
+
+    def update_areas(self) -> None:
+        """``A_p`` on the faces as deformed by the body's current displacement."""
+        f = self.field
+        x = f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)]
+        thickness = f.body.thickness if f.gdim == 2 else 1.0
+        areas = thickness * face_areas(self.face, x[self._facet_nodes])
+        share = np.zeros((self._facet_nodes.size, f.gdim))
+        share[:, 0] = (areas[:, None] * np.asarray(self.face.area_weights)[None, :]).ravel()
+        self.area = f.to_owners(self._facet_nodes.ravel(), share)[self.local, 0]
 
 
 @dataclass
@@ -99,21 +118,6 @@ class MasterFaces:
     ids: np.ndarray  # (n_faces,) global face numbers, unique over all ranks
     nodes: np.ndarray  # (n_faces, nn) system node indices
     X: np.ndarray  # (n_faces, nn, gdim) reference coordinates
-
-
-def slave_nodes(field: BodyField, group: str) -> SlaveNodes:
-    """Slave nodes of a facet group with ``A_p = sum_f w_p,f A_f`` (contact-theory.md §2.1)."""
-    dim, facets = field.mesh.groups[group]
-    face, nodes = facet_nodes(field, facets)
-    thickness = field.body.thickness if field.gdim == 2 else 1.0
-    areas = thickness * face_areas(face, field.X[nodes])
-    share = areas[:, None] * np.asarray(face.area_weights)[None, :]
-    values = np.zeros((len(nodes.ravel()), field.gdim))
-    values[:, 0] = share.ravel()
-    values[:, 1] = 1.0  # marks slave nodes (an area can round to zero)
-    summed = field.to_owners(nodes.ravel(), values)
-    owned = np.flatnonzero(summed[:, 1] > 0)
-    return SlaveNodes(owned, field.nodes[owned], field.X[owned], summed[owned, 0])
 
 
 def master_faces(field: BodyField, group: str) -> MasterFaces:

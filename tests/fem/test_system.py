@@ -11,7 +11,7 @@ from dolfinx_friction.contact.shapes import face_areas
 from dolfinx_friction.model import BC, Body, ContactPair, Rigid, RigidMotion, Scene, Step
 from dolfinx_friction.problem import ContactProblem
 from dolfinx_friction.solver import Solver
-from dolfinx_friction.surfaces import master_faces, slave_nodes
+from dolfinx_friction.surfaces import SlaveNodes, master_faces
 from tests import meshes
 
 
@@ -79,7 +79,7 @@ def test_slave_areas_sum_to_the_surface_area(shared_dir):
     mesh = meshes.two_boxes(shared_dir / "boxes.msh")
     problem = ContactProblem(_boxes_scene(mesh))
     block = problem.body_field("block")
-    slaves = slave_nodes(block, "block_bottom")
+    slaves = SlaveNodes(block, "block_bottom")
     assert problem.comm.allreduce(slaves.area.sum()) == pytest.approx(0.25, rel=1e-12)
     assert problem.comm.allreduce(len(slaves.nodes)) == 25
 

@@ -35,8 +35,10 @@ def test_full_slip_force_ratio_is_mu(shared_dir):
 
 
 def test_uniform_pressure_penetration(shared_dir):
-    """Uniform pressure p on a block on a frictionless rigid floor: every slave node carries p,
-    and penetrates by the inverse of the linear law, d = (p + sigma_inf)/K for d >> eps."""
+    """Uniform pressure p on a block on a frictionless rigid floor: the floor carries p L, every
+    slave node the same pressure, and the nodes penetrate by the inverse of the linear law,
+    d = (p + sigma_inf)/K for d >> eps.  (A_p is measured on the deformed faces, which the
+    Poisson effect widens by 4e-4: the contact pressure is p/(1 + 4e-4).)"""
     mesh = meshes.rectangle_2d(shared_dir / "rect.msh", n=(8, 2))
     p, K, sigma_inf = 2.0, 5.0e4, E / 70000.0
     scene = Scene(
@@ -47,16 +49,18 @@ def test_uniform_pressure_penetration(shared_dir):
     result = run(scene, write=False)
     inter = result.problem.interactions[0]
     r = inter.elements.result
-    pressure = result.problem.comm.allgather(r.F_N / inter.slaves.area[inter.elements.slave])
-    gaps = result.problem.comm.allgather(r.g_N)
-    pressure, gaps = np.concatenate(pressure), np.concatenate(gaps)
+    comm = result.problem.comm
+    pressure = np.concatenate(comm.allgather(r.F_N / inter.slaves.area[inter.elements.slave]))
+    gaps = np.concatenate(comm.allgather(r.g_N))
     assert len(pressure) == 9
-    np.testing.assert_allclose(pressure, p, rtol=1e-9)
-    law = Linear(K, sigma_inf)
-    law_p, _ = law.pressure(-gaps)
-    np.testing.assert_allclose(law_p, p, rtol=1e-9)
-    np.testing.assert_allclose(-gaps, (p + sigma_inf) / K, rtol=1e-5)
-    np.testing.assert_allclose(-gaps, p / K, rtol=1.1 * sigma_inf / p)
+    assert comm.allreduce(r.F_N.sum()) == pytest.approx(p * 1.0, rel=1e-9)
+    np.testing.assert_allclose(pressure, pressure.mean(), rtol=1e-9)
+    assert pressure.mean() == pytest.approx(p, rel=5e-4)
+    law_p, _ = Linear(K, sigma_inf).pressure(-gaps)
+    np.testing.assert_allclose(law_p, pressure, rtol=1e-9)
+    d = (pressure.mean() + sigma_inf) / K
+    np.testing.assert_allclose(-gaps, d, rtol=1e-5)
+    np.testing.assert_allclose(-gaps, p / K, rtol=1.1 * sigma_inf / p + 5e-4)
 
 
 def observed_order(residuals: list[float]) -> float:
@@ -67,7 +71,7 @@ def observed_order(residuals: list[float]) -> float:
 
 
 def _sliding_boxes(mesh, tangent: str) -> Scene:
-    tol = dict(newton_rtol=1e-13, newton_atol=1e-14)
+    tol = dict(newton_rtol=1e-11, newton_atol=1e-14)  # round-off floor: 1e-13 relative
     return Scene(
         mesh=mesh, bodies=(Body("block", E, NU), Body("foundation", E, NU)),
         contacts=(ContactPair("block_bottom", "foundation_top", mu=0.3, tangent=tangent),),
