@@ -1,0 +1,259 @@
+#!/usr/bin/env bash
+# Run dolfinx_friction's test suite on Debian 13 (trixie: dolfinx 0.9, Python 3.13,
+# numpy 2, PETSc 3.22) from a Debian 12 host, inside a trixie root filesystem.
+#
+#   bash .ci/debian13.sh                  # build-or-reuse the rootfs, run everything
+#   bash .ci/debian13.sh --build-only     # only make sure the cached rootfs exists
+#   bash .ci/debian13.sh --rebuild        # rebuild the cached rootfs first
+#   bash .ci/debian13.sh -- -k gmsh -x    # extra arguments after -- go to pytest
+#
+# Stages (each prints how long it took):
+#   1. rootfs: a tarball cached OUTSIDE the repository
+#      ($DOLFINX_FRICTION_ROOTFS_CACHE, default /var/cache/dolfinx_friction/
+#      trixie-rootfs.tar), built with mmdebstrap (installed with apt-get when
+#      missing) from the Debian mirror this machine's apt sources use; rebuilt
+#      when the package list below changes (a stamp file next to it).
+#   2. unpack it into a temporary directory, copy the working tree in (no .git,
+#      .venv, caches or results), bind-mount /proc, /sys, /dev, /dev/pts, /dev/shm;
+#      a trap unmounts them and removes the directory on any exit.
+#   3. pytest serially, then under `mpirun -n 2`, as root inside the chroot,
+#      with PYTHONPATH at the copied repo (Debian's packages, no venv).
+#   4. the same verification scene run with `python3 -m dolfinx_friction run`
+#      in trixie and on the host (Debian 12, dolfinx 0.5): the reaction columns
+#      of both history.csv must agree within 1e-6 relative
+#      (.ci/compare_histories.py).
+#
+# Exits non-zero if any stage fails, or if a pytest run collects no tests
+# (pytest exit 5).
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+CACHE_DIR="${DOLFINX_FRICTION_ROOTFS_CACHE:-/var/cache/dolfinx_friction}"
+TARBALL="$CACHE_DIR/trixie-rootfs.tar"
+STAMP="$TARBALL.stamp"
+SUITE=trixie
+HOST_PY="${HOST_PYTHON:-/usr/bin/python3}"
+# Verification scene run on both releases; its reactions must agree.
+COMPARE_SCENE="${COMPARE_SCENE:-tests/data/release_check/scene.toml}"
+COMPARE_RTOL="${COMPARE_RTOL:-1e-6}"
+
+PACKAGES=(
+    python3-dolfinx python3-gmsh python3-scipy python3-pytest python3-hypothesis
+    python3-pyvista python3-matplotlib libegl1 openmpi-bin
+    # (calculix-ccx is not in trixie: the CalculiX peer tests skip there)
+    # dolfinx JIT-compiles forms (ffcx -> cffi -> C compiler + Python headers)
+    build-essential python3-dev
+)
+
+say() { printf 'debian13.sh: %s\n' "$*"; }
+die() { printf 'debian13.sh: ERROR: %s\n' "$*" >&2; exit 1; }
+now() { date +%s; }
+took() { say "$1 took $(($(now) - $2)) s"; }
+
+build_only=0
+rebuild=0
+PYTEST_ARGS=()
+while (($#)); do
+    case "$1" in
+        --build-only) build_only=1 ;;
+        --rebuild) rebuild=1 ;;
+        --) shift; PYTEST_ARGS=("$@"); break ;;
+        -h|--help) sed -n '2,30p' "${BASH_SOURCE[0]}"; exit 0 ;;
+        *) die "unknown argument: $1 (pytest arguments go after --)" ;;
+    esac
+    shift
+done
+
+[[ "$(id -u)" -eq 0 ]] || die "needs root (chroot, bind mounts, mmdebstrap in root mode)"
+
+# ------------------------------------------------------------------ stage 1: rootfs
+# The Debian mirror of this machine's apt sources (deb822 or one-line format).
+debian_mirror() {
+    local f uri
+    for f in /etc/apt/sources.list /etc/apt/sources.list.d/*.list /etc/apt/sources.list.d/*.sources; do
+        [[ -r "$f" ]] || continue
+        uri="$(awk '
+            /^[[:space:]]*#/ { next }
+            /^URIs:/ { for (i = 2; i <= NF; i++) if ($i ~ /\/debian\/?$/) { print $i; exit } }
+            /^deb[[:space:]]/ { for (i = 2; i <= NF; i++) if ($i ~ /^[a-z+]+:\/\/.*\/debian\/?$/) { print $i; exit } }
+        ' "$f")"
+        if [[ -n "$uri" ]]; then
+            printf '%s\n' "${uri%/}"
+            return
+        fi
+    done
+    printf '%s\n' http://deb.debian.org/debian
+}
+
+want_stamp="$(printf '%s\n' "$SUITE" "${PACKAGES[@]}" | sha256sum | cut -d' ' -f1)"
+
+build_rootfs() {
+    local start mirror tmp
+    start="$(now)"
+    if ! command -v mmdebstrap >/dev/null 2>&1; then
+        say "installing mmdebstrap"
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -q mmdebstrap >/dev/null \
+            || { apt-get update -q >/dev/null && DEBIAN_FRONTEND=noninteractive \
+                 apt-get install -y -q mmdebstrap >/dev/null; } \
+            || die "cannot install mmdebstrap"
+    fi
+    mirror="$(debian_mirror)"
+    say "building the $SUITE rootfs from $mirror into $TARBALL (takes a few minutes)"
+    mkdir -p "$CACHE_DIR"
+    tmp="$TARBALL.partial.$$"
+    rm -f "$tmp"
+    local log="$CACHE_DIR/mmdebstrap.log"
+    if ! mmdebstrap --mode=root --variant=apt --format=tar \
+            --aptopt='APT::Install-Recommends "false"' \
+            --include="$(IFS=,; echo "${PACKAGES[*]}")" \
+            "$SUITE" "$tmp" "deb $mirror $SUITE main" >"$log" 2>&1; then
+        tail -n 40 "$log" >&2
+        rm -f "$tmp"
+        die "mmdebstrap failed (log: $log)"
+    fi
+    mv -f "$tmp" "$TARBALL"
+    printf '%s\n' "$want_stamp" >"$STAMP"
+    took "building the rootfs ($(du -h "$TARBALL" | cut -f1))" "$start"
+}
+
+if ((rebuild)) || [[ ! -f "$TARBALL" || ! -f "$STAMP" || "$(cat "$STAMP")" != "$want_stamp" ]]; then
+    build_rootfs
+else
+    say "reusing the cached rootfs $TARBALL"
+fi
+((build_only)) && exit 0
+
+# ------------------------------------------------------------------ stage 2: chroot
+WORK="$(mktemp -d "${TMPDIR:-/tmp}/dolfinx_friction-trixie.XXXXXX")"
+R="$WORK/rootfs"
+MOUNTS=()
+
+cleanup() {
+    local rc=$? i
+    for ((i = ${#MOUNTS[@]} - 1; i >= 0; i--)); do
+        umount "${MOUNTS[i]}" 2>/dev/null || umount -l "${MOUNTS[i]}" 2>/dev/null \
+            || printf 'debian13.sh: WARNING: could not unmount %s\n' "${MOUNTS[i]}" >&2
+    done
+    # Only remove the tree when nothing is mounted below it any more.
+    if ! grep -q " $WORK/" /proc/self/mounts; then
+        rm -rf "$WORK"
+    else
+        printf 'debian13.sh: WARNING: mounts left below %s, not removed\n' "$WORK" >&2
+    fi
+    exit "$rc"
+}
+trap cleanup EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
+
+start="$(now)"
+mkdir -p "$R"
+tar -xf "$TARBALL" -C "$R"
+for d in proc sys dev dev/pts dev/shm; do
+    mkdir -p "$R/$d"
+    mount --bind "/$d" "$R/$d"
+    MOUNTS+=("$R/$d")
+done
+cp /etc/resolv.conf "$R/etc/resolv.conf" 2>/dev/null || true
+grep -q "$(hostname)" "$R/etc/hosts" 2>/dev/null || echo "127.0.1.1 $(hostname)" >>"$R/etc/hosts"
+
+# The working tree (what is being tested, committed or not), without bulky or
+# host-specific parts.
+mkdir -p "$R/work/repo" "$R/work/home" "$R/work/tmp"
+tar -C "$ROOT" -cf - \
+    --exclude=./.git --exclude=./.venv --exclude=__pycache__ --exclude=.pytest_cache \
+    --exclude=.hypothesis --exclude='*_results' --exclude='*.egg-info' --exclude=./build . \
+    | tar -C "$R/work/repo" -xf -
+took "unpacking the rootfs and copying the repo" "$start"
+
+# in_chroot CMD...: run a command in the chroot, in the copied repo, with a clean environment.
+in_chroot() {
+    chroot "$R" /usr/bin/env -i \
+        PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
+        HOME=/work/home XDG_CACHE_HOME=/work/home/.cache TMPDIR=/work/tmp \
+        LANG=C.UTF-8 PYTHONPATH=/work/repo PYTHONDONTWRITEBYTECODE=1 PYTHONNOUSERSITE=1 \
+        OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 \
+        OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_btl_sm_single_copy_mechanism=none \
+        OMPI_MCA_rmaps_base_oversubscribe=1 PRTE_MCA_rmaps_default_mapping_policy=:oversubscribe \
+        VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow CI="${CI:-}" \
+        bash -c 'cd /work/repo && "$@"' in-chroot "$@"
+}
+
+in_chroot python3 -c '
+import sys, numpy, dolfinx, basix, ufl, petsc4py.PETSc as P, mpi4py, scipy, gmsh
+print("debian13.sh: trixie: Python %s, dolfinx %s, basix %s, ufl %s, PETSc %s, numpy %s, scipy %s, gmsh %s"
+      % (sys.version.split()[0], dolfinx.__version__, basix.__version__, ufl.__version__,
+         ".".join(map(str, P.Sys.getVersion())), numpy.__version__, scipy.__version__,
+         gmsh.__version__))
+'
+
+describe() {  # describe NAME RC
+    case "$2" in
+        0) say "$1 passed" ;;
+        5) printf 'debian13.sh: %s FAILED: no tests were collected (pytest exit 5)\n' "$1" >&2 ;;
+        *) printf 'debian13.sh: %s FAILED (exit code %s)\n' "$1" "$2" >&2 ;;
+    esac
+}
+
+# ------------------------------------------------------------------ stage 3: pytest
+targets=(tests)
+for arg in "${PYTEST_ARGS[@]}"; do
+    [[ "$arg" != -* && -e "$ROOT/${arg%%::*}" ]] && { targets=(); break; }
+done
+
+start="$(now)"
+say "trixie serial run: pytest -q -p no:cacheprovider ${targets[*]} ${PYTEST_ARGS[*]}"
+serial_rc=0
+in_chroot python3 -m pytest -q -p no:cacheprovider "${targets[@]}" "${PYTEST_ARGS[@]}" || serial_rc=$?
+describe "trixie serial run" "$serial_rc"
+took "trixie serial run" "$start"
+
+start="$(now)"
+say "trixie MPI run: mpirun -n 2 pytest -q -p no:cacheprovider ${targets[*]} ${PYTEST_ARGS[*]}"
+mpi_rc=0
+# Only rank 0 prints; the other rank's output is shown when the run fails.
+in_chroot mpirun -n 2 --oversubscribe --bind-to none \
+    bash -c '
+        if [[ "${OMPI_COMM_WORLD_RANK:-0}" == 0 ]]; then
+            exec "$@"
+        else
+            exec "$@" >"/work/tmp/pytest.rank${OMPI_COMM_WORLD_RANK}.log" 2>&1
+        fi
+    ' rank-wrapper python3 -m pytest -q -p no:cacheprovider --color=no \
+    "${targets[@]}" "${PYTEST_ARGS[@]}" || mpi_rc=$?
+if ((mpi_rc != 0)); then
+    for f in "$R"/work/tmp/pytest.rank*.log; do
+        [[ -e "$f" ]] || continue
+        echo "----- output of ${f##*/} -----" >&2
+        tail -n 200 "$f" >&2
+    done
+fi
+describe "trixie MPI run (2 ranks)" "$mpi_rc"
+took "trixie MPI run" "$start"
+
+# ------------------------------------------------------------------ stage 4: releases agree
+compare_rc=0
+if [[ -n "$COMPARE_SCENE" ]]; then
+    start="$(now)"
+    [[ -f "$ROOT/$COMPARE_SCENE" ]] || die "comparison scene $COMPARE_SCENE not found"
+    host_out="$WORK/host_results"
+    say "releases: running $COMPARE_SCENE on trixie (dolfinx 0.9) and on the host (dolfinx 0.5)"
+    in_chroot python3 -m dolfinx_friction run --quiet --out /work/trixie_results "$COMPARE_SCENE" \
+        || compare_rc=$?
+    (cd "$ROOT" && env PYTHONPATH="$ROOT" PYTHONDONTWRITEBYTECODE=1 \
+        "$HOST_PY" -m dolfinx_friction run --quiet --out "$host_out" "$COMPARE_SCENE") \
+        || compare_rc=$?
+    if ((compare_rc == 0)); then
+        "$HOST_PY" "$ROOT/.ci/compare_histories.py" --rtol "$COMPARE_RTOL" \
+            --label "Debian 12 (dolfinx 0.5)" "$host_out/history.csv" \
+            --label "Debian 13 (dolfinx 0.9)" "$R/work/trixie_results/history.csv" \
+            || compare_rc=$?
+    fi
+    describe "release comparison" "$compare_rc"
+    took "release comparison" "$start"
+fi
+
+if ((serial_rc != 0 || mpi_rc != 0 || compare_rc != 0)); then
+    exit 1
+fi
+say "all Debian 13 runs passed"
