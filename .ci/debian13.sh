@@ -245,8 +245,8 @@ if [[ -n "$COMPARE_SCENE" ]]; then
         || compare_rc=$?
     if ((compare_rc == 0)); then
         "$HOST_PY" "$ROOT/.ci/compare_histories.py" --rtol "$COMPARE_RTOL" \
-            --label "Debian 12 (dolfinx 0.5)" "$host_out/history.csv" \
-            --label "Debian 13 (dolfinx 0.9)" "$R/work/trixie_results/history.csv" \
+            --label "Debian 12 (dolfinx 0.5)" --label "Debian 13 (dolfinx 0.9)" \
+            "$host_out/history.csv" "$R/work/trixie_results/history.csv" \
             || compare_rc=$?
     fi
     describe "release comparison" "$compare_rc"

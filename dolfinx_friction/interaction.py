@@ -56,6 +56,15 @@ class RigidMaster:
 
 
 @dataclass
+class _Candidates:
+    """Possible (slave node, master) pairs of an increment."""
+
+    slave: np.ndarray  # indices into the pair's slave nodes
+    face: np.ndarray  # rows of the received master faces (-1 for rigid)
+    nodes: np.ndarray  # (n, nodes) system nodes of each candidate element
+
+
+@dataclass
 class Elements:
     """The current elements of a pair: which slaves, which master, and their results."""
 
@@ -63,6 +72,7 @@ class Elements:
     face: np.ndarray  # row of the master face in the received face set (-1 for rigid)
     nodes: np.ndarray  # (n, nodes) system nodes of each element
     face_id: np.ndarray  # global number of each element's master face (-1 for rigid)
+    candidate: np.ndarray  # index of each element among the pair's candidates
     result: Optional[ElementResult] = None
 
 
@@ -89,8 +99,9 @@ class ContactInteraction:
         self.cutoff = params.law.cutoff(slaves.area)
         self.initial_gap = np.zeros(n)  # negative clearances found at the first pairing (§3.4)
         self._first_pairing = True
-        self.elements = Elements(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int),
-                                 np.zeros(0, int))
+        self.elements = Elements(*(np.zeros(0, int),) * 2, np.zeros((0, 2), int),
+                                 *(np.zeros(0, int),) * 2)
+        self.candidates = _Candidates(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int))
         self._faces: Optional[tuple[np.ndarray, np.ndarray]] = None  # received (nodes, X)
         self._gather: Optional[NodeValues] = None
         self._slave_gather: Optional[NodeValues] = None
@@ -125,20 +136,36 @@ class ContactInteraction:
         self._face_ids = np.concatenate([f[2] for f in incoming])
         self._radius = radius
 
-    def prepare(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray]) -> None:
-        """(Re)build the gathers for this rank's slave nodes and nearby master faces."""
+    def search(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray]) -> None:
+        """Candidate masters of every slave node, once per increment (collective).
+
+        Updates the slave areas on the deformed faces, receives the master faces
+        near this rank's slave nodes and keeps, for each slave node, the faces
+        with the nearest centroids: pairing within the increment chooses among
+        them, so the matrix pattern of the contact couplings stays fixed.
+        """
         if self._slave_gather is None:
             self._slave_gather = NodeValues(u, self.slaves.nodes, self.gdim)
+        self.slaves.update_areas()
+        self.cutoff = self.params.law.cutoff(self.slaves.area)
+        n = len(self.slaves.nodes)
         if self.rigid:
             if self._gather is None:
                 self._gather = NodeValues(u, np.array([self.master.node]), self.gdim)
+            self.candidates = _Candidates(np.arange(n), np.full(n, -1), np.stack(
+                [np.full(n, self.master.node), self.slaves.nodes], axis=1))
             return
-        x_slaves = self.slaves.X + self._slave_gather(u)
-        self._exchange_faces(u_faces_local, x_slaves)
+        x_s = self.slaves.X + self._slave_gather(u)
+        self._exchange_faces(u_faces_local, x_s)
         self._gather = NodeValues(u, self._faces[0].ravel(), self.gdim)
+        face_nodes, X_f = self._faces
+        x_f = X_f + self._gather(u).reshape(X_f.shape)
+        slave, face = _nearest_faces(x_s, x_f, self._radius, 16 if self.gdim == 3 else 6)
+        nodes = np.concatenate([face_nodes[face], self.slaves.nodes[slave, None]], axis=1)
+        self.candidates = _Candidates(slave, face, nodes)
 
     def pair(self, u: PETSc.Vec, iteration: int) -> None:
-        """Pair every slave node with its master within the cutoff.
+        """Pair every slave node with one of its candidate masters within the cutoff.
 
         A slave node takes the nearest face onto which it projects orthogonally.
         Within an increment (``iteration > 0``) pairing has hysteresis: an element
@@ -146,31 +173,24 @@ class ContactInteraction:
         :data:`FACE_SLACK` past its edges), even above the cutoff; elements are
         dropped only at the first pairing of the next increment.
         """
-        if iteration == 0:  # areas of the deformed slave faces, once per increment
-            self.slaves.update_areas()
-            self.cutoff = self.params.law.cutoff(self.slaves.area)
+        cands = self.candidates
         u_s = self._slave_gather(u)
-        x_s = self.slaves.X + u_s
         had = np.zeros(len(self.slaves.nodes), dtype=bool)
         if iteration > 0:
             had[self.elements.slave] = True
         if self.rigid:
-            U = self._gather(u)[0]
-            kin = self.master.kinematics(self.slaves.X, u_s, U)
-            slave = np.flatnonzero((kin.g_N <= self.cutoff) | had)
-            nodes = np.stack([np.full(len(slave), self.master.node), self.slaves.nodes[slave]], 1)
-            self.elements = Elements(slave, np.full(len(slave), -1), nodes, np.full(len(slave), -1))
-            self._record_initial_gaps()
+            kin = self.master.kinematics(self.slaves.X, u_s, self._gather(u)[0])
+            chosen = np.flatnonzero((kin.g_N <= self.cutoff) | had)
+            self._set_elements(chosen)
             return
-        face_nodes, X_f = self._faces
+        slave, cand = cands.slave, cands.face
+        x_s = self.slaves.X + u_s
         face = self.master.face
-        u_f = self._gather(u).reshape(X_f.shape)
-        x_f = X_f + u_f
-        slave, cand = _candidates(x_s, x_f, self._radius)
-        proj = project(face, x_s[slave], x_f[cand])
+        x_f = (self._faces[1] + self._gather(u).reshape(self._faces[1].shape))[cand]
+        proj = project(face, x_s[slave], x_f)
         phi, dphi, _ = face.evaluate(proj.xi)
-        r = x_s[slave] - np.einsum("nk,nkd->nd", phi, x_f[cand])
-        m = surface_vector(np.einsum("nka,nkd->nad", dphi, x_f[cand]))
+        r = x_s[slave] - np.einsum("nk,nkd->nd", phi, x_f)
+        m = surface_vector(np.einsum("nka,nkd->nad", dphi, x_f))
         g_N = np.einsum("nd,nd->n", r, m) / np.linalg.norm(m, axis=1)
         previous = np.full(len(self.slaves.nodes), -1, dtype=np.int64)
         if iteration > 0:
@@ -179,14 +199,17 @@ class ContactInteraction:
         # preference: the current face (within FACE_SLACK), an interior projection, a near miss
         rank = np.where(proj.interior, 1, 2)
         rank[(self._face_ids[cand] == previous[slave]) & (outside <= FACE_SLACK)] = 0
-        ok = (outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave])
-        slave, cand, dist, rank = slave[ok], cand[ok], np.abs(g_N[ok]), rank[ok]
-        order = np.lexsort((self._face_ids[cand], dist, rank, slave))
+        ok = np.flatnonzero((outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave]))
+        order = ok[np.lexsort((self._face_ids[cand[ok]], np.abs(g_N[ok]), rank[ok], slave[ok]))]
         first = np.unique(slave[order], return_index=True)[1]
-        best = order[first]
-        slave, cand = slave[best], cand[best]
-        nodes = np.concatenate([face_nodes[cand], self.slaves.nodes[slave, None]], axis=1)
-        self.elements = Elements(slave, cand, nodes, self._face_ids[cand])
+        self._set_elements(order[first])
+
+    def _set_elements(self, chosen: np.ndarray) -> None:
+        """Make the chosen candidates the current elements."""
+        c = self.candidates
+        face_id = self._face_ids[c.face[chosen]] if not self.rigid else np.full(len(chosen), -1)
+        self.elements = Elements(c.slave[chosen], c.face[chosen], c.nodes[chosen], face_id,
+                                 chosen)
         self._record_initial_gaps()
 
     def _record_initial_gaps(self) -> None:
@@ -269,11 +292,14 @@ def _face_size(x_faces: np.ndarray) -> np.ndarray:
     return np.linalg.norm(x_faces - c, axis=2).max(axis=1) if len(x_faces) else np.zeros(0)
 
 
-def _candidates(x_slaves: np.ndarray, x_faces: np.ndarray, radius: float
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """All (slave, face) pairs whose face centroid lies within ``radius`` of the slave."""
+def _nearest_faces(x_slaves: np.ndarray, x_faces: np.ndarray, radius: float, k: int
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """(slave, face) pairs: the ``k`` faces with the nearest centroids within ``radius``."""
     if len(x_slaves) == 0 or len(x_faces) == 0:
         return np.zeros(0, int), np.zeros(0, int)
-    pairs = cKDTree(x_slaves).sparse_distance_matrix(
-        cKDTree(x_faces.mean(axis=1)), radius, output_type="ndarray")
-    return pairs["i"].astype(np.int64), pairs["j"].astype(np.int64)
+    k = min(k, len(x_faces))
+    dist, face = cKDTree(x_faces.mean(axis=1)).query(x_slaves, k=k, distance_upper_bound=radius)
+    slave = np.repeat(np.arange(len(x_slaves)), k)
+    face, dist = face.reshape(-1), dist.reshape(-1)
+    found = np.isfinite(dist)
+    return slave[found], face[found]

@@ -57,6 +57,11 @@ class RunSummary:
     failure: str = ""
 
 
+def _dofs(nodes: np.ndarray, gdim: int) -> np.ndarray:
+    """Scalar dofs (n, nodes*gdim) of elements given by their system nodes (n, nodes)."""
+    return (nodes[:, :, None] * gdim + np.arange(gdim)).reshape(len(nodes), nodes.shape[1] * gdim)
+
+
 class _Loading:
     """Prescribed values of one step: constrained rows and ramped external forces."""
 
@@ -264,25 +269,25 @@ class Solver:
         self.R.setArray(r)
         self.timers.add("bulk_assembly", time.perf_counter() - t0)
         t0 = time.perf_counter()
-        pairing = it < max((i.pairing_iterations for i in p.interactions), default=0)
-        if pairing:
-            p.update_fields()
-        rows, cols, vals = [], [], []
+        if jacobian and it == 0:
+            p.update_fields()  # the search reads master faces and slave areas from the bodies
+        vals = []
         for k, inter in enumerate(p.interactions):
-            if it < inter.pairing_iterations and jacobian:
+            if jacobian and it < inter.pairing_iterations:
                 ts = time.perf_counter()
-                inter.prepare(p.u, p.master_displacements(k))
+                if it == 0:
+                    inter.search(p.u, p.master_displacements(k))
                 inter.pair(p.u, it)
                 self.timers.add("contact_search", time.perf_counter() - ts)
             el = inter.evaluate(p.u, self.u_n, self._ramp)
-            dofs = (el.nodes[:, :, None] * d + np.arange(d)).reshape(len(el.nodes), el.nodes.shape[1] * d)
+            dofs = _dofs(el.nodes, d)
             self.R.setValues(dofs.ravel().astype(PETSc.IntType), el.result.f.ravel(),
                              addv=PETSc.InsertMode.ADD)
-            if jacobian:
+            if jacobian:  # tangents into the slots of the pair's candidate elements
                 nd = dofs.shape[1]
-                rows.append(np.repeat(dofs, nd, axis=1).ravel())
-                cols.append(np.tile(dofs, (1, nd)).ravel())
-                vals.append(el.result.K.ravel())
+                block = np.zeros((len(inter.candidates.slave), nd, nd))
+                block[el.candidate] = el.result.K.reshape(-1, nd, nd)
+                vals.append(block.ravel())
         self.R.assemble()
         self.timers.add("contact_assembly", time.perf_counter() - t0)
         r = self.R.getArray()
@@ -291,18 +296,24 @@ class Solver:
         self.R.setArray(r)
         if jacobian:
             t0 = time.perf_counter()
-            self._fill_jacobian(rows, cols, vals, bc_rows)
+            self._fill_jacobian(vals, bc_rows)
             self.timers.add("contact_assembly", time.perf_counter() - t0)
         return self.R.norm()
 
-    def _fill_jacobian(self, rows, cols, vals, bc_rows) -> None:
+    def _fill_jacobian(self, vals: list, bc_rows: np.ndarray) -> None:
+        """Bulk stiffness + contact tangents; the pattern holds all candidate couplings and is
+        rebuilt only when the candidates change (at most once per increment)."""
         p = self.problem
-        cat = lambda a: np.concatenate(a) if a else np.zeros(0)  # noqa: E731
-        rows, cols, vals = cat(rows).astype(np.int64), cat(cols).astype(np.int64), cat(vals)
-        pairs = [i.elements.nodes for i in p.interactions]
+        vals = np.concatenate(vals) if vals else np.zeros(0)
+        pairs = [i.candidates.nodes for i in p.interactions]
         same = (self._pattern is not None and len(pairs) == len(self._pairs)
                 and all(np.array_equal(a, b) for a, b in zip(pairs, self._pairs)))
         if self.comm.allreduce(0 if same else 1) > 0:
+            dofs = [_dofs(nodes, self.gdim) for nodes in pairs]
+            rows = np.concatenate([np.repeat(x, x.shape[1], axis=1).ravel() for x in dofs]
+                                  + [np.zeros(0, np.int64)])
+            cols = np.concatenate([np.tile(x, (1, x.shape[1])).ravel() for x in dofs]
+                                  + [np.zeros(0, np.int64)])
             self._pattern = CooPattern(self.comm, p.layout.n_owned * self.gdim,
                                        [(p.bulk_rows, p.bulk_cols), (rows, cols)])
             self._bulk_data = self._pattern.gather_values(0, p.bulk_vals)
