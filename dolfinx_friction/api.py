@@ -27,10 +27,13 @@ class RunResult:
 
 def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         overrides: Sequence[str] = (), quiet: bool = False, write: bool = True,
-        comm: MPI.Comm = MPI.COMM_WORLD, petsc_options: Optional[dict] = None) -> RunResult:
+        comm: MPI.Comm = MPI.COMM_WORLD, petsc_options: Optional[dict] = None,
+        reuse_factorisation: bool = False) -> RunResult:
     """Solve a scene (a :class:`Scene` or a scene file) and write its results.
 
-    ``out`` overrides ``[output] dir``; ``write=False`` keeps everything in memory.
+    ``out`` overrides ``[output] dir``; ``write=False`` keeps everything in memory;
+    ``petsc_options`` (without prefix) set the linear solver; ``reuse_factorisation``
+    keeps an LU factorisation as GMRES preconditioner across Newton iterations.
     Raises :class:`ConvergenceError` (after writing ``summary.json``) when an
     increment fails after all cutbacks.
     """
@@ -38,7 +41,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     if not isinstance(scene, Scene):
         scene = load_scene(Path(scene), list(overrides))
     problem = ContactProblem(scene, comm)
-    solver = Solver(problem, petsc_options=petsc_options)
+    solver = Solver(problem, petsc_options=petsc_options,
+                    reuse_factorisation=reuse_factorisation)
     directory = Path(out) if out is not None else (scene.output.dir or default_output_dir(scene))
     writer = None
     if write:

@@ -17,10 +17,9 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction.assembly import CooPattern
+from dolfinx_friction.linear import LinearSolver
 from dolfinx_friction.problem import ContactProblem, ModelError, Timers
 
-DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu",
-                         "pc_factor_mat_solver_type": "mumps"}
 
 
 class ConvergenceError(RuntimeError):
@@ -78,18 +77,12 @@ class Solver:
     """Drives a :class:`ContactProblem` through the steps of its scene."""
 
     def __init__(self, problem: ContactProblem, options_prefix: str = "dolfinx_friction_",
-                 petsc_options: Optional[dict] = None):
+                 petsc_options: Optional[dict] = None, reuse_factorisation: bool = False):
         self.problem = problem
         p = problem
         self.comm, self.gdim = p.comm, p.gdim
         self.timers = Timers()
-        opts = PETSc.Options()
-        for key, value in {**DEFAULT_PETSC_OPTIONS, **(petsc_options or {})}.items():
-            if not opts.hasName(options_prefix + key):
-                opts[options_prefix + key] = value
-        self.ksp = PETSc.KSP().create(p.comm)
-        self.ksp.setOptionsPrefix(options_prefix)
-        self.ksp.setFromOptions()
+        self.linear = LinearSolver(p.comm, options_prefix, reuse_factorisation, petsc_options)
         self.u_n = p.u.duplicate()
         self.R = p.u.duplicate()
         self.du = p.u.duplicate()
@@ -240,10 +233,9 @@ class Solver:
             if it == step.max_iterations:
                 return False, it, residuals
             t0 = time.perf_counter()
-            self.ksp.setOperators(self._J)
-            self.ksp.solve(self.R, self.du)
+            solved = self.linear.solve(self._J, self.R, self.du)
             self.timers.add("linear_solve", time.perf_counter() - t0)
-            if self.ksp.getConvergedReason() < 0:
+            if not solved:
                 return False, it + 1, residuals
             p.u.axpy(-1.0, self.du)
             if step.line_search:
