@@ -1,6 +1,7 @@
 """Run a scene: the entry point shared by the command line and Python scripts."""
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -13,6 +14,11 @@ from dolfinx_friction.output import ResultWriter
 from dolfinx_friction.problem import ContactProblem
 from dolfinx_friction.scene import default_output_dir, load_scene
 from dolfinx_friction.solver import ConvergenceError, Increment, RunSummary, Solver
+
+
+#: Overclosure, as a share of the slave node spacing, beyond which a run warns that the
+#: penalty is too soft for the mesh.
+PENETRATION_WARNING = 0.05
 
 
 @dataclass
@@ -50,9 +56,17 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
                               scene.output.contact_table, quiet)
     solver.timers.add("setup", time.perf_counter() - start)
     increments: list[Increment] = []
+    warnings: dict[str, str] = {}
 
     def record(inc: Increment) -> None:
         increments.append(inc)
+        for pair, ratio in inc.penetration.items():
+            if ratio > PENETRATION_WARNING and pair not in warnings:
+                warnings[pair] = (f"contact {pair}: overclosure reaches {ratio:.1%} of the slave "
+                                  f"node spacing at t = {inc.t:.4g}; the penalty K is too soft "
+                                  f"for this mesh")
+                if comm.rank == 0:
+                    print(f"dolfinx-friction: warning: {warnings[pair]}", file=sys.stderr)
         if writer is not None:
             t0 = time.perf_counter()
             writer.increment(inc)
@@ -63,9 +77,9 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     except ConvergenceError:
         solver.summary.wall = time.perf_counter() - start
         if writer is not None:
-            writer.summary(solver.summary)
+            writer.summary(solver.summary, {"warnings": list(warnings.values())})
         raise
     summary.wall = time.perf_counter() - start
     if writer is not None:
-        writer.summary(summary)
+        writer.summary(summary, {"warnings": list(warnings.values())})
     return RunResult(problem, summary, increments, directory if write else None)

@@ -285,6 +285,13 @@ class ContactInteraction:
         closed = r.status != OPEN
         return int(closed.sum()), int((closed & (r.status == SLIP)).sum())
 
+    def penetration(self) -> float:
+        """Largest overclosure on this rank relative to the slave node's spacing."""
+        r = self.elements.result
+        if r is None or len(r.g_N) == 0:
+            return 0.0
+        return float(np.max(-r.g_N / self.slaves.spacing[self.elements.slave]))
+
 
 def _face_size(x_faces: np.ndarray) -> np.ndarray:
     """Largest distance of a face node from the face centroid."""

@@ -43,6 +43,7 @@ class Increment:
     reactions: dict[str, np.ndarray]
     rigid_u: dict[str, np.ndarray]
     rigid_f: dict[str, np.ndarray]
+    penetration: dict[str, float]  # largest overclosure / slave spacing, per contact pair
 
 
 @dataclass
@@ -339,5 +340,7 @@ class Solver:
             rigid_f[rigid.name] = comm.bcast(internal[rows].copy() if comm.rank == 0 else None)
         counts = np.sum([i.counts() for i in p.interactions], axis=0) if p.interactions else (0, 0)
         active, slipping = (int(c) for c in comm.allreduce(np.asarray(counts)))
+        penetration = {i.name: comm.allreduce(i.penetration(), op=MPI.MAX)
+                       for i in p.interactions}
         return Increment(index, name, number, t, iters, residuals[-1], residuals, active,
-                         slipping, wall, reactions, rigid_u, rigid_f)
+                         slipping, wall, reactions, rigid_u, rigid_f, penetration)

@@ -107,6 +107,8 @@ class SlaveNodes:
         share = np.zeros((self._facet_nodes.size, f.gdim))
         share[:, 0] = (areas[:, None] * np.asarray(self.face.area_weights)[None, :]).ravel()
         self.area = f.to_owners(self._facet_nodes.ravel(), share)[self.local, 0]
+        #: nodal spacing: the side of the representative area (its length in 2D)
+        self.spacing = self.area / thickness if f.gdim == 2 else np.sqrt(self.area)
 
 
 @dataclass
