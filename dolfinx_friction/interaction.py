@@ -73,6 +73,7 @@ class Elements:
     nodes: np.ndarray  # (n, nodes) system nodes of each element
     face_id: np.ndarray  # global number of each element's master face (-1 for rigid)
     candidate: np.ndarray  # index of each element among the pair's candidates
+    xi: Optional[np.ndarray] = None  # last projection point, a start for the next one
     result: Optional[ElementResult] = None
 
 
@@ -181,7 +182,7 @@ class ContactInteraction:
         if self.rigid:
             kin = self.master.kinematics(self.slaves.X, u_s, self._gather(u)[0])
             chosen = np.flatnonzero((kin.g_N <= self.cutoff) | had)
-            self._set_elements(chosen)
+            self._set_elements(chosen, np.zeros((len(chosen), 0)))
             return
         slave, cand = cands.slave, cands.face
         x_s = self.slaves.X + u_s
@@ -201,15 +202,15 @@ class ContactInteraction:
         rank[(self._face_ids[cand] == previous[slave]) & (outside <= FACE_SLACK)] = 0
         ok = np.flatnonzero((outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave]))
         order = ok[np.lexsort((self._face_ids[cand[ok]], np.abs(g_N[ok]), rank[ok], slave[ok]))]
-        first = np.unique(slave[order], return_index=True)[1]
-        self._set_elements(order[first])
+        chosen = order[np.unique(slave[order], return_index=True)[1]]
+        self._set_elements(chosen, proj.xi[chosen])
 
-    def _set_elements(self, chosen: np.ndarray) -> None:
-        """Make the chosen candidates the current elements."""
+    def _set_elements(self, chosen: np.ndarray, xi: np.ndarray) -> None:
+        """Make the chosen candidates (projected at ``xi``) the current elements."""
         c = self.candidates
         face_id = self._face_ids[c.face[chosen]] if not self.rigid else np.full(len(chosen), -1)
         self.elements = Elements(c.slave[chosen], c.face[chosen], c.nodes[chosen], face_id,
-                                 chosen)
+                                 chosen, xi)
         self._record_initial_gaps()
 
     def _record_initial_gaps(self) -> None:
@@ -218,9 +219,9 @@ class ContactInteraction:
             return
         self._first_pairing = False
         el = self.elements
-        zero = np.zeros((len(el.slave), self.gdim))
+        zero = np.zeros((len(self.slaves.X), self.gdim))
         u_master = np.zeros_like(self._gather.local.getArray()).reshape(-1, self.gdim)
-        g0 = self._kinematics(el, self.slaves.X[el.slave], zero, u_master).g_N
+        g0 = self._kinematics(el, np.arange(len(el.slave)), zero, u_master).g_N
         self.initial_gap[el.slave] = np.minimum(g0, 0.0)
 
     # -------------------------------------------------------------- evaluation
@@ -233,14 +234,15 @@ class ContactInteraction:
         """
         el = self.elements
         s = el.slave
-        X_s = self.slaves.X[s]
-        kin = self._kinematics(el, X_s, self._slave_gather(u)[s], self._master_values(u))
+        every = np.arange(len(s))
+        kin = self._kinematics(el, every, self._slave_gather(u), self._gather(u), el.xi)
+        el.xi = kin.xi
         history = None
         if self.params.mu > 0.0:
             history = self.history.take(s)
-            kin_n = self._kinematics(el, X_s, self._slave_gather(u_n)[s], self._master_values(u_n))
-            new = ~self.in_contact[s]  # first touch: s = 0 against the start-of-increment state
-            history.w[new] = kin_n.w[new]
+            new = np.flatnonzero(~self.in_contact[s])  # first touch: s = 0 from the start state
+            u_s, u_m = self._slave_gather(u_n), self._gather(u_n)  # collective: always gather
+            history.w[new] = self._kinematics(el, new, u_s, u_m, el.xi[new]).w
             history.g_T[new] = 0.0
             history.g_p[new] = 0.0
         el.result = evaluate(kin, self.slaves.area[s], self.params, history,
@@ -248,17 +250,17 @@ class ContactInteraction:
         self._trial = el.result.trial
         return el
 
-    def _master_values(self, vec: PETSc.Vec) -> np.ndarray:
-        """Displacements of the master nodes this rank knows (collective)."""
-        return self._gather(vec)
-
-    def _kinematics(self, el: Elements, X_s, u_s, u_master: np.ndarray) -> Kinematics:
+    def _kinematics(self, el: Elements, rows: np.ndarray, u_slaves: np.ndarray,
+                    u_master: np.ndarray, xi0: Optional[np.ndarray] = None) -> Kinematics:
+        """Kinematics of some elements, from gathered slave and master displacements."""
+        s = el.slave[rows]
+        X_s, u_s = self.slaves.X[s], u_slaves[s]
         if self.rigid:
             return self.master.kinematics(X_s, u_s, u_master[0])
         _, X_f = self._faces
-        u_f = u_master.reshape(X_f.shape)[el.face]
-        return face_kinematics(self.master.face, X_s, u_s, X_f[el.face], u_f,
-                               tangent=self.params.tangent)
+        f = el.face[rows]
+        return face_kinematics(self.master.face, X_s, u_s, X_f[f],
+                               u_master.reshape(X_f.shape)[f], xi0, tangent=self.params.tangent)
 
     # ---------------------------------------------------------------- history
     def commit(self) -> None:
