@@ -143,8 +143,9 @@ def rigid_kinematics(shape: str, X_slave: Array, u_slave: Array, U: Array, *,
     n, d = x.shape
     eye = np.eye(d)
     if shape == "plane":
-        nrm = np.broadcast_to(np.asarray(normal, float) / np.linalg.norm(normal), (n, d)).copy()
-        g_N = (x - (np.asarray(point, float) + U)) @ nrm[0]
+        unit = np.asarray(normal, float) / np.linalg.norm(normal)
+        nrm = np.broadcast_to(unit, (n, d)).copy()
+        g_N = (x - (np.asarray(point, float) + U)) @ unit
         dn_slave = np.zeros((n, d, d))
     else:
         v = x - (np.asarray(center if shape == "sphere" else point, float) + U)
