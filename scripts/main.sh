@@ -12,4 +12,4 @@ export PYTHONNOUSERSITE=1
 # Render with EGL directly (no X server): avoids VTK's "bad X server" warning.
 export VTK_DEFAULT_OPENGL_WINDOW="${VTK_DEFAULT_OPENGL_WINDOW:-vtkEGLRenderWindow}"
 
-exec .venv/bin/dolfinx-friction run demos/sliding_block/sliding_block.toml "$@"
+exec .venv/bin/dolfinx-friction run demos/sliding_block.toml "$@"

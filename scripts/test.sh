@@ -5,6 +5,9 @@
 # replace the default `tests` directory.
 #
 # Exits non-zero if either run fails or collects no tests (pytest exit 5).
+# Each run is stopped after DOLFINX_FRICTION_TEST_TIMEOUT seconds (default
+# 2400): a test that fails on one rank only can leave the other rank waiting
+# in a collective forever.
 # Under MPI only rank 0 prints; the other ranks' output goes to a log file that
 # is shown when that run fails.
 set -euo pipefail
@@ -23,6 +26,9 @@ export OMPI_MCA_btl_vader_single_copy_mechanism="${OMPI_MCA_btl_vader_single_cop
 # Render with EGL directly (no X server): avoids VTK's "bad X server" warning.
 export VTK_DEFAULT_OPENGL_WINDOW="${VTK_DEFAULT_OPENGL_WINDOW:-vtkEGLRenderWindow}"
 
+TIMEOUT="${DOLFINX_FRICTION_TEST_TIMEOUT:-2400}"
+run_limited() { timeout --foreground --kill-after=30 "$TIMEOUT" "$@"; }
+
 # Test location: `tests` unless an extra argument is an existing path.
 targets=(tests)
 for arg in "$@"; do
@@ -36,13 +42,14 @@ describe() {  # describe NAME RC
     case "$2" in
         0) echo "test.sh: $1 run passed" ;;
         5) echo "test.sh: $1 run FAILED: no tests were collected (pytest exit 5)" >&2 ;;
+        124|137) echo "test.sh: $1 run FAILED: stopped after ${TIMEOUT}s (hung?)" >&2 ;;
         *) echo "test.sh: $1 run FAILED (exit code $2)" >&2 ;;
     esac
 }
 
 echo "test.sh: serial run: pytest -q${targets[*]:+ ${targets[*]}}${*:+ $*}"
 serial_rc=0
-"$PY" -m pytest -q "${targets[@]}" "$@" || serial_rc=$?
+run_limited "$PY" -m pytest -q "${targets[@]}" "$@" || serial_rc=$?
 describe serial "$serial_rc"
 
 MPI_LOG_DIR="$(mktemp -d "${TMPDIR:-/tmp}/dolfinx_friction-mpi.XXXXXX")"
@@ -50,7 +57,7 @@ trap 'rm -rf "$MPI_LOG_DIR"' EXIT
 
 echo "test.sh: MPI run: mpirun -n 2 pytest -q -p no:cacheprovider${targets[*]:+ ${targets[*]}}${*:+ $*}"
 mpi_rc=0
-mpirun -n 2 --oversubscribe --bind-to none \
+run_limited mpirun -n 2 --oversubscribe --bind-to none \
     -x PYTHONNOUSERSITE -x VTK_DEFAULT_OPENGL_WINDOW \
     bash -c '
         log="$1"; shift
