@@ -2,17 +2,20 @@
 from __future__ import annotations
 
 import argparse
+import logging
+import os
 import sys
 from pathlib import Path
 from typing import Optional, Sequence
 
-from dolfinx_friction.errors import EXIT_INPUT, classify
-from dolfinx_friction.scene import SceneError, load_scene
+from dolfinx_friction.errors import EXIT_INPUT, EXIT_INTERNAL, OutputError, classify
+from dolfinx_friction.scene import SceneError, default_output_dir, load_scene
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str):  # one line, no usage dump
-        print(f"dolfinx-friction: error: {message}", file=sys.stderr)
+    def error(self, message: str):  # one line (from rank 0), no usage dump
+        if _rank() == 0:
+            print(f"dolfinx-friction: error: {message}", file=sys.stderr)
         raise SystemExit(EXIT_INPUT)
 
 
@@ -28,29 +31,55 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene value by dotted path, e.g. contact.0.mu=0.2")
     run.add_argument("--quiet", action="store_true", help="no progress output")
-    run.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+    run.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                     help=argparse.SUPPRESS)
     check = sub.add_parser("check", help="validate a scene and its mesh, solve nothing")
     check.add_argument("scene", type=Path)
     check.add_argument("--set", dest="overrides", action="append", default=[],
                        metavar="KEY=VALUE")
-    check.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+    check.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                       help=argparse.SUPPRESS)
     return parser
 
 
-def _check(args) -> None:
+def _precheck(args, scene) -> None:
+    """What can be told before dolfinx is imported and the mesh is read: the mesh file
+    exists, and no regular file stands where the output directory is to be made."""
+    mesh = Path(scene.mesh)
+    if not mesh.is_file():
+        reason = "is a directory" if mesh.is_dir() else "no such file"
+        raise SceneError(f"mesh.file: {mesh}: {reason}", key="mesh.file", source=str(args.scene))
+    if args.command != "run":
+        return
+    directory = Path(args.out) if args.out is not None else default_output_dir(scene)
+    for path in (directory, *directory.absolute().parents):
+        if path.exists():
+            if not path.is_dir():
+                raise OutputError(f"output directory {directory}: {path} is not a directory")
+            if not os.access(path, os.W_OK | os.X_OK):
+                raise OutputError(f"output directory {directory}: {path} is not writable")
+            break
+
+
+def _check(args, scene) -> None:
     from mpi4py import MPI
     from dolfinx_friction.problem import ContactProblem
-    scene = load_scene(args.scene, args.overrides)
+    from dolfinx_friction.solver import Solver
     problem = ContactProblem(scene, MPI.COMM_WORLD)
+    # What the mesh alone cannot tell: the prescribed values of every step (overlapping
+    # bc groups that disagree on a component).  Nothing is solved.
+    solver = Solver(problem)
+    for index in range(len(scene.steps)):
+        solver._step_loading(index)
     if MPI.COMM_WORLD.rank == 0:
         n_dofs = problem.layout.n_global * problem.gdim
         print(f"{args.scene}: ok ({problem.gdim}D, {len(scene.bodies)} bodies, "
               f"{len(scene.contacts)} contact pairs, {len(scene.steps)} steps, {n_dofs} dofs)")
 
 
-def _run(args) -> None:
+def _run(args, scene) -> None:
     from dolfinx_friction.api import run
-    result = run(args.scene, out=args.out, overrides=args.overrides, quiet=args.quiet)
+    result = run(scene, out=args.out, quiet=args.quiet)
     from mpi4py import MPI
     if MPI.COMM_WORLD.rank == 0 and not args.quiet:
         s = result.summary
@@ -58,17 +87,56 @@ def _run(args) -> None:
               f"{s.cutbacks} cutbacks, {s.wall:.2f} s; results in {result.directory}")
 
 
+def _rank() -> int:
+    """This process's MPI rank, without initialising MPI just to print an error."""
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is not None and mpi.Is_initialized() and not mpi.Is_finalized():
+        return mpi.COMM_WORLD.rank
+    for name in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK", "MV2_COMM_WORLD_RANK"):
+        if os.environ.get(name, "").isdigit():
+            return int(os.environ[name])
+    return 0
+
+
+def _quiet_libraries(debug: bool) -> None:
+    """Library log records reach stderr from WARNING up (INFO too with --debug).
+
+    The handler is installed before dolfinx is imported, so that FFCx's
+    ``logging.basicConfig()`` adds none of its own; the level is on the handler, as
+    the JIT compiler (distutils) lowers the root logger's level to INFO while it
+    builds a form, which would fill stderr with compiler command lines.
+    """
+    root = logging.getLogger()
+    if root.handlers:  # configured by an embedding program: leave it alone
+        return
+    handler = logging.StreamHandler()
+    handler.setLevel(logging.INFO if debug else logging.WARNING)
+    handler.setFormatter(logging.Formatter("%(levelname)s:%(name)s:%(message)s"))
+    root.addHandler(handler)
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     args = _parser().parse_args(argv)
+    _quiet_libraries(args.debug)
     try:
         if not args.scene.is_file():
-            raise SceneError(f"{args.scene}: no such scene file")
-        _run(args) if args.command == "run" else _check(args)
-    except Exception as exc:  # one line on stderr, a traceback only with --debug
-        status, message = classify(exc)
-        if args.debug or status is None:
+            reason = "is a directory" if args.scene.is_dir() else "no such scene file"
+            raise SceneError(f"{args.scene}: {reason}")
+        # The scene is read and validated before dolfinx is imported: a bad scene is
+        # answered at once.
+        scene = load_scene(args.scene, args.overrides)
+        _precheck(args, scene)
+        _run(args, scene) if args.command == "run" else _check(args, scene)
+    except Exception as exc:  # one line on stderr (rank 0), a traceback only with --debug
+        if args.debug:
             raise
-        print(f"dolfinx-friction: error: {message}", file=sys.stderr)
+        status, message = classify(exc)
+        if status is None:
+            status = EXIT_INTERNAL
+            message = (f"internal error: {type(exc).__name__}: {message} "
+                       "(rerun with --debug for the traceback)")
+        if _rank() == 0:
+            print(f"dolfinx-friction: error: {message}", file=sys.stderr, flush=True)
         return status
     return 0
 

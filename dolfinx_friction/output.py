@@ -2,9 +2,28 @@
 
 Tables are written by rank 0.  Every converged increment is appended in one
 ``write`` and flushed to disk (``fsync``) before the next increment starts;
-field files of an increment are written into a scratch folder that is renamed
-into place when complete.  A run killed at any moment therefore leaves the
-increments already converged complete and readable.
+field files of an increment are written into a scratch folder
+(``fields/.<name>.partial``) that is renamed into place when complete.  A run
+killed at any moment therefore leaves the increments already converged complete
+and readable.
+
+What a killed run leaves, precisely.  For each increment the files are written
+in this order: the rows of ``contact.csv``, the field folder
+``fields/step<s>_increment<iiii>``, then the row of ``history.csv``.  So
+
+* ``history.csv`` lists complete increments only; it is the record of what
+  converged *and was fully written*;
+* ``contact.csv`` holds the same increments, possibly followed by all the rows
+  of the next one (the kill came before its ``history.csv`` row);
+* ``fields/`` holds a complete folder for each increment of ``history.csv``,
+  possibly one more (the same next increment), and at most one hidden
+  ``.<name>.partial`` scratch folder, which is never a result;
+* every line of the tables ends with a newline: an increment's rows go out in a
+  single ``write(2)`` of whole lines (a reader may still treat a last line
+  without its newline as incomplete, should the kernel ever cut such a write
+  short);
+* ``summary.json`` is written (atomically) only when the solve ends: all steps
+  converged, or an increment diverged after all its cutbacks.
 """
 from __future__ import annotations
 
@@ -21,6 +40,7 @@ from mpi4py import MPI
 
 from dolfinx_friction import compat
 from dolfinx_friction.contact.element import STATUS_NAMES
+from dolfinx_friction.errors import OutputError
 from dolfinx_friction.problem import ContactProblem
 from dolfinx_friction.solver import Increment, RunSummary
 
@@ -28,14 +48,13 @@ OUR_FILES = ("history.csv", "contact.csv", "summary.json")
 AXES = "xyz"
 
 
-class OutputError(OSError):
-    """The output directory cannot be prepared or written."""
-
-
 def _append(path: Path, text: str) -> None:
+    """Append whole lines with one ``write`` (continued should it be short), then fsync."""
+    data = memoryview(text.encode())
     fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
     try:
-        os.write(fd, text.encode())
+        while data:
+            data = data[os.write(fd, data):]
         os.fsync(fd)
     finally:
         os.close(fd)

@@ -106,10 +106,11 @@ class ContactProblem:
                                      f"group")
         for g in s.output.reactions or ():
             self._check_node_group(g, "output.reactions")
-        wrong = [v for v in _vectors(s) if len(v) != self.gdim]
+        wrong = [(key, v) for key, v in _vectors(s) if len(v) != self.gdim]
         if wrong:
-            raise ModelError(f"scene vectors have {len(wrong[0])} components, the mesh "
-                             f"{s.mesh} is {self.gdim}D")
+            key, v = wrong[0]
+            raise ModelError(f"{key} has {len(v)} components, but the mesh {s.mesh} is "
+                             f"{self.gdim}D (every vector has the mesh dimension)")
         for b in s.bodies:
             if self.gdim == 3 and (b.plane != "strain" or b.thickness != 1.0):
                 raise ModelError(f"body {b.name!r}: plane/thickness apply to 2D meshes only")
@@ -175,12 +176,17 @@ class ContactProblem:
         return f.u.x.array.reshape(-1, self.gdim)[inter.master.local]
 
 
-def _vectors(scene: Scene) -> list[tuple]:
+def _vectors(scene: Scene) -> list[tuple[str, tuple]]:
+    """Every vector of the scene with its key path (arrays indexed from 0)."""
     out = []
-    for step in scene.steps:
-        out += [bc.u for bc in step.bcs]
-        out += [ld.traction for ld in step.loads if ld.traction is not None]
-        out += [r.displacement or r.force for r in step.rigid]
-    for r in scene.rigids:
-        out += [v for v in (r.point, r.normal, r.center, r.axis) if v is not None]
+    for i, step in enumerate(scene.steps):
+        out += [(f"step.{i}.bc.{j}.u", bc.u) for j, bc in enumerate(step.bcs)]
+        out += [(f"step.{i}.load.{j}.traction", ld.traction) for j, ld in enumerate(step.loads)
+                if ld.traction is not None]
+        for j, r in enumerate(step.rigid):
+            name = "displacement" if r.displacement is not None else "force"
+            out.append((f"step.{i}.rigid.{j}.{name}", getattr(r, name)))
+    for i, r in enumerate(scene.rigids):
+        out += [(f"rigid.{i}.{name}", getattr(r, name))
+                for name in ("point", "normal", "center", "axis") if getattr(r, name) is not None]
     return out

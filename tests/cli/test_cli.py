@@ -1,0 +1,647 @@
+"""The command line, through a subprocess: every bad input answered by one line.
+
+``python -m dolfinx_friction run|check`` is run on a few tiny scenes and on many
+broken variants of them.  A broken scene, mesh or argument must give
+
+* a non-zero exit status (2: the input is at fault),
+* exactly one non-empty line on stderr that names the key, group, value or
+  file at fault, and no traceback.
+
+Good scenes must exit 0 and write the files of shared/scene-format.md; a run
+that diverges exits 3 and keeps only converged increments.
+
+The subprocesses are started from a serial pytest only: under ``mpirun -n 2``
+every test here is skipped (once is enough), and one test launches
+``mpirun -n 2`` itself instead.  The broken-input cases are independent
+subprocesses, so they are started a few at a time in a thread pool as soon as
+the first one is needed; each test then waits for its own.
+"""
+from __future__ import annotations
+
+import copy
+import csv
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Optional
+
+import pytest
+from mpi4py import MPI
+
+from tests import meshes
+
+pytestmark = pytest.mark.skipif(
+    MPI.COMM_WORLD.size > 1,
+    reason="the CLI is tested through subprocesses from a serial pytest "
+           "(test_mpirun_matches_serial launches mpirun -n 2 itself)")
+
+ROOT = Path(__file__).resolve().parents[2]
+TIMEOUT = 300
+EXIT_INPUT, EXIT_DIVERGED = 2, 3
+WORKERS = max(2, min(4, os.cpu_count() or 1))
+
+
+# --------------------------------------------------------------------------- helpers
+
+#: Where the subprocesses keep their bytecode (set by the ``workdir`` fixture): with
+#: PYTHONDONTWRITEBYTECODE each of the ~90 subprocesses would compile every module again.
+_PYCACHE: list[Path] = []
+
+
+def cli_env() -> dict[str, str]:
+    """The environment of a CLI subprocess: the package importable, no inherited MPI job."""
+    env = {k: v for k, v in os.environ.items()
+           if not k.startswith(("OMPI_COMM_WORLD", "OMPI_MCA_ess", "PMIX_", "PMI_"))}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT)] + [p for p in
+                                        env.get("PYTHONPATH", "").split(os.pathsep) if p])
+    env["PYTHONNOUSERSITE"] = "1"
+    if _PYCACHE:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        env["PYTHONPYCACHEPREFIX"] = str(_PYCACHE[0])
+    return env
+
+
+@dataclass
+class Outcome:
+    args: list[str]
+    status: int
+    stdout: str
+    stderr: str
+
+    def __str__(self) -> str:
+        return (f"command: {' '.join(self.args)}\nexit status: {self.status}\n"
+                f"--- stdout ---\n{self.stdout}--- stderr ---\n{self.stderr}")
+
+
+def cli(*args: Any, cwd: Optional[Path] = None) -> Outcome:
+    command = [sys.executable, "-m", "dolfinx_friction", *map(str, args)]
+    proc = subprocess.run(command, capture_output=True, text=True, env=cli_env(), cwd=cwd,
+                          timeout=TIMEOUT)
+    return Outcome(command, proc.returncode, proc.stdout, proc.stderr)
+
+
+def assert_one_line_error(out: Outcome, expect: list[str], status: int = EXIT_INPUT) -> str:
+    """Exit ``status``, exactly one non-empty stderr line naming everything in ``expect``."""
+    assert out.status == status, str(out)
+    lines = out.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].strip(), f"expected one line on stderr\n{out}"
+    assert "Traceback" not in out.stderr, str(out)
+    line = lines[0]
+    for text in expect:
+        assert text in line, f"{text!r} not in the error line\n{out}"
+    return line
+
+
+def toml_dumps(data: dict) -> str:
+    """A minimal TOML writer for scene dictionaries (tables, arrays of tables, values)."""
+    def key(k: str) -> str:
+        return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k)
+
+    def value(v: Any) -> str:
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, float):
+            assert math.isfinite(v)
+            return repr(v)
+        if isinstance(v, int):
+            return str(v)
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{key(k)} = {value(x)}" for k, x in v.items()) + "}"
+        raise TypeError(type(v))
+
+    def is_tables(v: Any) -> bool:
+        return isinstance(v, list) and bool(v) and all(isinstance(x, dict) for x in v)
+
+    lines: list[str] = []
+
+    def table(prefix: str, d: dict) -> None:
+        for k, v in d.items():
+            if not isinstance(v, dict) and not is_tables(v):
+                lines.append(f"{key(k)} = {value(v)}")
+        for k, v in d.items():
+            if isinstance(v, dict):
+                lines.append(f"\n[{prefix}{key(k)}]")
+                table(f"{prefix}{key(k)}.", v)
+            elif is_tables(v):
+                for item in v:
+                    lines.append(f"\n[[{prefix}{key(k)}]]")
+                    table(f"{prefix}{key(k)}.", item)
+
+    table("", data)
+    return "\n".join(lines) + "\n"
+
+
+DELETE = object()
+
+
+def edited(data: dict, edits: list[tuple[str, Any]]) -> dict:
+    """A copy of ``data`` with ``(dotted path, value)`` edits.
+
+    ``DELETE`` removes the key; an array index one past the end appends.
+    """
+    data = copy.deepcopy(data)
+    for path, new in edits:
+        *parents, last = path.split(".")
+        node: Any = data
+        for p in parents:
+            node = node[int(p)] if isinstance(node, list) else node.setdefault(p, {})
+        if isinstance(node, list):
+            if int(last) == len(node):  # one past the end: append
+                node.append(new)
+            else:
+                node[int(last)] = new
+        elif new is DELETE:
+            del node[last]
+        else:
+            node[last] = new
+    return data
+
+
+# --------------------------------------------------------------------------- scenes
+
+#: Block on a foundation, frictional contact, pressed then slid (mesh two.msh).
+GOOD = {
+    "title": "tiny block slid on a foundation",
+    "mesh": {"file": "two.msh"},
+    "body": [{"name": "block", "E": 1000.0, "nu": 0.3},
+             {"name": "foundation", "E": 1000.0, "nu": 0.3}],
+    "contact": [{"slave": "block_bottom", "master": "foundation_top", "mu": 0.3}],
+    "step": [
+        {"name": "press", "increments": 1,
+         "bc": [{"on": "foundation_bottom", "u": [0.0, 0.0, 0.0]},
+                {"on": "block_top", "u": [0.0, 0.0, -0.01]}]},
+        {"name": "slide", "increments": 3,
+         "bc": [{"on": "block_top", "u": [0.05, 0.0, -0.01]}]},
+    ],
+    "output": {"fields": False},
+}
+
+#: One block pressed onto a rigid plane (mesh block.msh: groups block, bottom, top,
+#: side_x0, side_y0 and the edge group edge_x0y0).
+RIGID = {
+    "mesh": {"file": "block.msh"},
+    "body": [{"name": "block", "E": 1000.0, "nu": 0.3}],
+    "rigid": [{"name": "floor", "shape": "plane", "point": [0.0, 0.0, 0.0],
+               "normal": [0.0, 0.0, 1.0]}],
+    "contact": [{"slave": "bottom", "master": "floor", "mu": 0.2}],
+    "step": [{"name": "press", "increments": 2,
+              "bc": [{"on": "top", "u": [0.0, 0.0, -0.01]}],
+              "rigid": [{"name": "floor", "displacement": [0.0, 0.0, 0.0]}]}],
+    "output": {"fields": False},
+}
+
+#: A 2D strip on a rigid circle (mesh rect.msh: block, bottom, top, left, right).
+PLANAR = {
+    "mesh": {"file": "rect.msh"},
+    "body": [{"name": "block", "E": 1000.0, "nu": 0.3}],
+    "rigid": [{"name": "drum", "shape": "sphere", "center": [0.5, -0.5], "radius": 0.5}],
+    "contact": [{"slave": "bottom", "master": "drum"}],
+    "step": [{"bc": [{"on": "top", "u": [0.0, -0.001]}]}],
+    "output": {"fields": False},
+}
+
+BASES = {"good": GOOD, "rigid": RIGID, "planar": PLANAR}
+
+
+def _block_with_edge(path: Path) -> Path:
+    """tests.meshes.block_3d (2x2x1 hexahedra) plus the edge group ``edge_x0y0``."""
+    import gmsh
+
+    def build():
+        box = meshes._box(0, 0, 0, 1, 1, 0.5)
+        meshes._mesh_boxes([(box, (2, 2, 1))])
+        meshes._group(3, [box], "block")
+        meshes._group(2, meshes._boundary(3, box, 2, 0.0), "bottom")
+        meshes._group(2, meshes._boundary(3, box, 2, 0.5), "top")
+        meshes._group(2, meshes._boundary(3, box, 0, 0.0), "side_x0")
+        meshes._group(2, meshes._boundary(3, box, 1, 0.0), "side_y0")
+        edges = [t for _, t in gmsh.model.getEntities(1)
+                 if max(abs(c) for c in gmsh.model.occ.getCenterOfMass(1, t)[:2]) < 1e-9]
+        meshes._group(1, edges, "edge_x0y0")
+    return meshes._write(build, path)
+
+
+def _with_empty_group(path: Path) -> Path:
+    """A meshed box whose named group ``empty_group`` holds no element."""
+    import gmsh
+
+    def build():
+        box = meshes._box(0, 0, 0, 1, 1, 1)
+        meshes._mesh_boxes([(box, (1, 1, 1))])
+        meshes._group(3, [box], "block")
+        meshes._group(2, meshes._boundary(3, box, 2, 0.0), "bottom")
+        meshes._group(2, [gmsh.model.addDiscreteEntity(2)], "empty_group")
+    return meshes._write(build, path)
+
+
+def _without_names(path: Path) -> Path:
+    """A meshed box with physical groups that have no names."""
+    import gmsh
+
+    def build():
+        box = meshes._box(0, 0, 0, 1, 1, 1)
+        meshes._mesh_boxes([(box, (1, 1, 1))])
+        gmsh.model.addPhysicalGroup(3, [box])
+        gmsh.model.addPhysicalGroup(2, meshes._boundary(3, box, 2, 0.0))
+    return meshes._write(build, path)
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory) -> Path:
+    """Meshes and base scenes, made once for the module."""
+    d = tmp_path_factory.mktemp("cli")
+    _PYCACHE[:] = [tmp_path_factory.getbasetemp() / "cli_pycache"]
+    meshes.two_boxes(d / "two.msh", n_block=(2, 2, 1), n_foundation=(3, 3, 1))
+    _block_with_edge(d / "block.msh")
+    meshes.rectangle_2d(d / "rect.msh", n=(4, 1))
+    _with_empty_group(d / "empty_group.msh")
+    _without_names(d / "nonames.msh")
+    (d / "corrupt.msh").write_bytes(b"\x00\x01 this is not a Gmsh file\n" * 4)
+    text = (d / "two.msh").read_bytes()
+    (d / "truncated.msh").write_bytes(text[: len(text) // 3])
+    for name, data in BASES.items():
+        written = toml_dumps(data)
+        assert tomllib.loads(written) == data  # the writer is faithful
+        (d / f"{name}.toml").write_text(written)
+    (d / "a_file").write_text("not a directory\n")
+    return d
+
+
+# --------------------------------------------------------------------------- bad inputs
+
+@dataclass
+class Case:
+    """A broken input: ``base`` scene with ``edits`` (or ``text``), run with ``args``."""
+
+    id: str
+    expect: list[str]
+    edits: list[tuple[str, Any]] = field(default_factory=list)
+    base: str = "good"
+    command: str = "check"
+    args: list[str] = field(default_factory=list)
+    text: Optional[str] = None           # the scene file's text instead of base + edits
+    scene: Optional[str] = None          # the scene path argument instead of the case's file
+
+    def scene_file(self, d: Path) -> Path:
+        if self.scene is not None:
+            return Path(self.scene.format(d=d))
+        path = d / f"case_{self.id}.toml"
+        path.write_text(self.text if self.text is not None
+                        else toml_dumps(edited(BASES[self.base], self.edits)))
+        return path
+
+    def argv(self, d: Path) -> list[str]:
+        return [self.command, str(self.scene_file(d))] + [a.format(d=d) for a in self.args]
+
+
+CASES = [
+    # unknown keys
+    Case("unknown_top_key", ["colour", "unknown key"], [("colour", "red")]),
+    Case("unknown_body_key", ["body.0.Young"], [("body.0.Young", 1000.0)]),
+    Case("unknown_contact_key", ["contact.0.friction", "unknown key"],
+         [("contact.0.friction", 0.3)]),
+    Case("unknown_step_key", ["step.1.increment", "increments"], [("step.1.increment", 3)]),
+    Case("unknown_bc_key", ["step.0.bc.1.value"], [("step.0.bc.1.value", [0.0, 0.0, 0.0])]),
+    Case("unknown_output_key", ["output.reaction"], [("output.reaction", ["block_top"])]),
+    # wrong types
+    Case("E_is_a_string", ["body.0.E", '"stiff"'], [("body.0.E", "stiff")]),
+    Case("increments_not_integer", ["step.1.increments", "2.5"], [("step.1.increments", 2.5)]),
+    Case("mu_is_a_string", ["contact.0.mu", '"high"'], [("contact.0.mu", "high")]),
+    Case("fields_not_bool", ["output.fields", '"yes"'], [("output.fields", "yes")]),
+    Case("bc_is_a_table", ["step.0.bc"], [("step.0.bc", {"on": "block_top"})]),
+    # out of range
+    Case("E_zero", ["body.1.E", "0"], [("body.1.E", 0)]),
+    Case("E_negative", ["body.0.E", "-5.0"], [("body.0.E", -5.0)]),
+    Case("nu_half", ["body.0.nu", "0.5"], [("body.0.nu", 0.5)]),
+    Case("nu_below_minus_one", ["body.1.nu", "-1.5"], [("body.1.nu", -1.5)]),
+    Case("mu_negative", ["contact.0.mu", "-0.1"], [("contact.0.mu", -0.1)]),
+    Case("K_zero", ["contact.0.K", "0.0"], [("contact.0.K", 0.0)]),
+    Case("K_negative", ["contact.0.K", "-1000.0"], [("contact.0.K", -1000.0)]),
+    Case("stick_slope_negative", ["contact.0.stick_slope", "-1000.0"],
+         [("contact.0.stick_slope", -1000.0)]),
+    Case("stick_slope_zero", ["contact.0.stick_slope", "0"], [("contact.0.stick_slope", 0)]),
+    Case("degree_three", ["body.0.degree", "3"], [("body.0.degree", 3)]),
+    # missing keys and sections
+    Case("missing_E", ["body.0.E", "missing"], [("body.0.E", DELETE)]),
+    Case("missing_bc_u", ["step.0.bc.1.u"], [("step.0.bc.1.u", DELETE)]),
+    Case("missing_mesh_table", ["mesh", "missing"], [("mesh", DELETE)]),
+    Case("no_body", ["body"], [("body", [])]),
+    # contact pairs, laws, shapes
+    Case("slave_equals_master", ["contact.0.master", "block_bottom"],
+         [("contact.0.master", "block_bottom")]),
+    Case("unknown_law", ["contact.0.law", "soft"], [("contact.0.law", "soft")]),
+    Case("exponential_without_p0", ["contact.0.p0", "exponential"],
+         [("contact.0.law", "exponential")]),
+    Case("tabular_without_table", ["contact.0.table", "tabular"], [("contact.0.law", "tabular")]),
+    Case("unknown_shape", ["rigid.0.shape", "cone"], [("rigid.0.shape", "cone")], base="rigid"),
+    Case("plane_without_normal", ["rigid.0.normal"], [("rigid.0.normal", DELETE)], base="rigid"),
+    Case("slave_is_rigid", ["contact.0.slave", "floor"],
+         [("contact.0.slave", "floor"), ("contact.0.master", "bottom")], base="rigid"),
+    Case("unknown_rigid_in_step", ["step.0.rigid.0.name", "wall"],
+         [("step.0.rigid.0.name", "wall")], base="rigid"),
+    Case("cylinder_in_2d", ["rigid.0.shape", "cylinder"],
+         [("rigid.0", {"name": "drum", "shape": "cylinder", "point": [0.5, -0.5],
+                       "axis": [0.0, 1.0], "radius": 0.5})], base="planar"),
+    # vectors and increments
+    Case("u_mixed_lengths", ["step.1.bc.0.u", "2 components"], [("step.1.bc.0.u", [0.05, 0.0])]),
+    Case("u_four_components", ["step.0.bc.0.u"], [("step.0.bc.0.u", [0.0, 0.0, 0.0, 0.0])]),
+    Case("u_bad_component", ["step.0.bc.1.u.2", "down"], [("step.0.bc.1.u", [0.0, 0.0, "down"])]),
+    Case("increments_zero", ["step.0.increments", "0"], [("step.0.increments", 0)]),
+    Case("increments_negative", ["step.1.increments", "-3"], [("step.1.increments", -3)]),
+    Case("max_cutbacks_negative", ["step.1.max_cutbacks", "-1"], [("step.1.max_cutbacks", -1)]),
+    Case("max_iterations_zero", ["step.0.max_iterations", "0"], [("step.0.max_iterations", 0)]),
+    Case("newton_rtol_zero", ["step.0.newton_rtol"], [("step.0.newton_rtol", 0.0)]),
+    # groups named in the scene
+    Case("empty_group_name", ["step.0.bc.0.on", '""'], [("step.0.bc.0.on", "")]),
+    Case("group_twice_in_step", ["step.0.bc.1.on", "foundation_bottom"],
+         [("step.0.bc.1.on", "foundation_bottom")]),
+    Case("traction_and_pressure", ["step.1.load.0", "traction", "pressure"],
+         [("step.1.load", [{"on": "block_top", "traction": [0.0, 0.0, -1.0],
+                            "pressure": 1.0}])]),
+    # files and syntax
+    Case("mesh_not_msh", ["mesh.file", "two.stl"], [("mesh.file", "two.stl")]),
+    Case("toml_syntax_error", ["case_toml_syntax_error.toml:3", "TOML"],
+         text='[mesh]\nfile = "two.msh"\n[[body]\nname = "block"\n'),
+    Case("scene_missing", ["no_such_scene.toml", "no such"], scene="{d}/no_such_scene.toml"),
+    Case("scene_is_a_directory", ["directory"], scene="{d}", command="run"),
+    # --set
+    Case("set_without_value", ["--set", "contact.0.mu", "KEY=VALUE"],
+         args=["--set", "contact.0.mu"]),
+    Case("set_index_out_of_range", ["step.5", "out of range"],
+         args=["--set", "step.5.increments=2"]),
+    Case("set_not_an_index", ["body.first", "index"], args=["--set", "body.first.E=1"]),
+    Case("set_unknown_key", ["contact.0.friction", "unknown key"],
+         args=["--set", "contact.0.friction=0.2"]),
+    Case("set_bad_value", ["body.0.E", "abc", "number"], args=["--set", "body.0.E=abc"]),
+    Case("set_out_of_range", ["contact.0.mu", "-0.2"], args=["--set", "contact.0.mu=-0.2"]),
+    Case("set_through_a_number", ["body.0.E", "neither a table nor an array"],
+         args=["--set", "body.0.E.x=1"]),
+    Case("set_bad_value_run", ["step.1.increments", "many"], command="run",
+         args=["--set", "step.1.increments=many", "--out", "{d}/never"]),
+    # command line
+    Case("unknown_option", ["--frobnicate"], args=["--frobnicate"]),
+    Case("unknown_command", ["solve"], command="solve"),
+    Case("out_without_value", ["--out"], command="run", args=["--out"]),
+    # the scene does not fit the mesh (dolfinx needed)
+    Case("bc_on_missing_group", ["step.0.bc.0.on", "nowhere"], [("step.0.bc.0.on", "nowhere")]),
+    Case("bc_on_missing_group_run", ["step.1.bc.0.on", "nowhere"], [("step.1.bc.0.on", "nowhere")],
+         command="run", args=["--out", "{d}/never"]),
+    Case("slave_missing", ["contact.0.slave", "bottom_face"], [("contact.0.slave", "bottom_face")]),
+    Case("slave_is_volume", ["contact.0.slave", "block", "dimension"],
+         [("contact.0.slave", "block")]),
+    Case("master_is_volume", ["contact.0.master", "foundation", "dimension"],
+         [("contact.0.master", "foundation")]),
+    Case("load_on_edge_3d", ["step.0.load.0.on", "edge_x0y0"],
+         [("step.0.load", [{"on": "edge_x0y0", "traction": [0.0, 0.0, -1.0]}])], base="rigid"),
+    Case("body_not_in_mesh", ["base", "two.msh"], [("body.1.name", "base")]),
+    Case("body_is_a_facet_group", ["foundation_top", "dimension"],
+         [("body.1.name", "foundation_top")]),
+    Case("reaction_group_missing", ["output.reactions", "nowhere"],
+         [("output.reactions", ["block_top", "nowhere"])]),
+    Case("u_2d_on_3d_mesh", ["step.0.bc.0.u", "3D"],
+         [("step.0.bc.0.u", [0.0, 0.0]), ("step.0.bc.1.u", [0.0, -0.01]),
+          ("step.1.bc.0.u", [0.05, -0.01])]),
+    Case("u_3d_on_2d_mesh", ["step.0.bc.0.u", "2D"],
+         [("step.0.bc.0.u", [0.0, -0.001, 0.0]), ("rigid.0.center", [0.5, -0.5, 0.0])],
+         base="planar"),
+    Case("conflicting_bcs_check", ["step.0", "overlapping"],
+         [("step.0.bc", [{"on": "top", "u": [0.0, 0.0, -0.01]},
+                         {"on": "side_x0", "u": [0.0, 0.0, 0.0]}])], base="rigid"),
+    Case("conflicting_bcs_later_step", ["step.1", "overlapping"],
+         [("step.1", {"name": "hold", "bc": [{"on": "side_x0", "u": [0.0, 0.0, 0.0]}]})],
+         base="rigid", command="run", args=["--out", "{d}/conflict_out", "--quiet"]),
+    # meshes
+    Case("mesh_file_missing", ["mesh.file", "absent.msh", "no such file"],
+         [("mesh.file", "absent.msh")], command="run", args=["--out", "{d}/never"]),
+    Case("mesh_corrupt", ["corrupt.msh", "cannot be read"], [("mesh.file", "corrupt.msh")]),
+    Case("mesh_truncated", ["truncated.msh"], [("mesh.file", "truncated.msh")]),
+    Case("mesh_without_names", ["nonames.msh", "no named physical groups"],
+         [("mesh.file", "nonames.msh")]),
+    Case("mesh_with_empty_group", ["empty_group", "empty"],
+         [("mesh.file", "empty_group.msh"), ("body", [{"name": "block", "E": 1.0, "nu": 0.3}]),
+          ("contact", []), ("step", [{"bc": [{"on": "bottom", "u": [0.0, 0.0, 0.0]}]}])]),
+    # output directory
+    Case("out_in_proc", ["/proc/forbidden"], command="run", args=["--out", "/proc/forbidden"]),
+    Case("out_under_a_file", ["a_file/results"], command="run",
+         args=["--out", "{d}/a_file/results"]),
+    Case("output_dir_under_a_file", ["a_file/out"], [("output.dir", "a_file/out")],
+         command="run"),
+]
+
+
+@pytest.fixture(scope="module")
+def outcomes(request, workdir):
+    """The subprocess of every selected case, started a few at a time on first use."""
+    selected = [item.callspec.params["case"] for item in request.session.items
+                if getattr(item, "module", None) is request.module
+                and "case" in getattr(getattr(item, "callspec", None), "params", {})]
+    pool = ThreadPoolExecutor(max_workers=WORKERS)
+    futures: dict[str, Future] = {}
+    for case in selected:
+        futures[case.id] = pool.submit(lambda c=case: cli(*c.argv(workdir), cwd=workdir))
+    yield futures
+    pool.shutdown(cancel_futures=True)
+
+
+def test_case_ids_are_distinct():
+    ids = [c.id for c in CASES]
+    assert len(set(ids)) == len(ids) >= 35
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
+def test_bad_input_one_line(case, outcomes, workdir):
+    out = outcomes[case.id].result(timeout=TIMEOUT)
+    assert_one_line_error(out, case.expect)
+    assert out.stdout == "", str(out)
+    assert not (workdir / "never").exists()
+
+
+def test_debug_shows_traceback(workdir):
+    """--debug (before or after the command) lets the exception through."""
+    scene = workdir / "case_debug.toml"
+    scene.write_text(toml_dumps(edited(GOOD, [("body.0.E", -1.0)])))
+    for argv in (["--debug", "check", scene], ["check", scene, "--debug"]):
+        out = cli(*argv)
+        assert out.status != 0 and "Traceback" in out.stderr and "body.0.E" in out.stderr, out
+
+
+# --------------------------------------------------------------------------- good runs
+
+HISTORY = ["step", "increment", "t", "newton_iterations", "residual", "active", "slipping",
+           "wall_s"]
+CONTACT_3D = ["step", "increment", "node", "x", "y", "z", "gap", "pressure", "normal_force",
+              "tangential_force_x", "tangential_force_y", "tangential_force_z", "slip", "status"]
+SUMMARY_KEYS = {"scene", "scene_sha256", "versions", "mpi_ranks", "dofs", "slave_nodes",
+                "increments", "cutbacks", "newton_iterations", "wall_time_s",
+                "wall_time_per_phase_s", "converged"}
+PHASES = {"setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
+          "output"}
+
+
+def read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    header, body = rows[0], rows[1:]
+    assert all(len(r) == len(header) for r in body), path
+    return header, [dict(zip(header, r)) for r in body]
+
+
+def increments_of(rows: list[dict[str, str]]) -> list[tuple[int, int]]:
+    seen: dict[tuple[int, int], None] = {}
+    for r in rows:
+        seen[(int(r["step"]), int(r["increment"]))] = None
+    return list(seen)
+
+
+def axes(prefix: str, name: str) -> list[str]:
+    return [f"{prefix}_{name}_{a}" for a in "xyz"]
+
+
+@pytest.fixture(scope="module")
+def good_run(workdir) -> tuple[Outcome, Path]:
+    out_dir = workdir / "good_out"
+    return cli("run", workdir / "good.toml", "--out", out_dir), out_dir
+
+
+def test_check_good_scene(workdir):
+    out = cli("check", workdir / "good.toml")
+    assert out.status == 0, str(out)
+    assert len(out.stdout.splitlines()) == 1 and "ok" in out.stdout, str(out)
+    assert out.stderr == "", str(out)
+
+
+def test_run_good_scene(good_run):
+    out, d = good_run
+    assert out.status == 0, str(out)
+    assert out.stderr == "", str(out)
+    assert "Traceback" not in out.stdout
+    # default reactions: every group carrying a bc, in order of first appearance
+    header, rows = read_csv(d / "history.csv")
+    assert header == HISTORY + axes("R", "foundation_bottom") + axes("R", "block_top")
+    assert [(int(r["step"]), int(r["increment"])) for r in rows] == [(0, 1), (1, 1), (1, 2),
+                                                                     (1, 3)]
+    assert [float(r["t"]) for r in rows] == pytest.approx([1.0, 4 / 3, 5 / 3, 2.0])
+    for r in rows:  # the reactions of the two supports balance
+        for a in "xyz":
+            total = float(r[f"R_block_top_{a}"]) + float(r[f"R_foundation_bottom_{a}"])
+            assert abs(total) <= 1e-6 * abs(float(rows[0]["R_block_top_z"]))
+    assert float(rows[0]["R_block_top_z"]) < 0  # the constraint pushes the block down
+    cheader, crows = read_csv(d / "contact.csv")
+    assert cheader == CONTACT_3D
+    assert increments_of(crows) == increments_of(rows)
+    assert {r["status"] for r in crows} <= {"open", "stick", "slip"}
+    summary = json.loads((d / "summary.json").read_text())
+    assert SUMMARY_KEYS <= set(summary), set(summary)
+    assert PHASES <= set(summary["wall_time_per_phase_s"])
+    assert summary["converged"] is True and summary["increments"] == 4
+    assert summary["mpi_ranks"] == 1 and summary["slave_nodes"] == 9
+    # progress: (at least) one line per increment
+    assert len(out.stdout.splitlines()) >= 4, str(out)
+
+
+def test_run_rigid_columns(workdir):
+    d = workdir / "rigid_out"
+    out = cli("run", workdir / "rigid.toml", "--out", d)
+    assert out.status == 0, str(out)
+    header, rows = read_csv(d / "history.csv")
+    assert header == HISTORY + axes("R", "top") + axes("U", "floor") + axes("F", "floor")
+    assert len(rows) == 2
+    last = rows[-1]
+    # the floor holds the block: its force balances the reaction on the top
+    assert float(last["F_floor_z"]) == pytest.approx(-float(last["R_top_z"]), rel=1e-6)
+    assert all(float(last[f"U_floor_{a}"]) == 0.0 for a in "xyz")
+    cheader, _ = read_csv(d / "contact.csv")
+    assert cheader == CONTACT_3D
+
+
+def test_diverging_run(workdir):
+    d = workdir / "diverged_out"
+    out = cli("run", workdir / "good.toml", "--out", d, "--quiet",
+              "--set", "step.1.max_iterations=1", "--set", "step.1.max_cutbacks=0")
+    line = assert_one_line_error(out, ["step 1", "increment 1", "converge"], EXIT_DIVERGED)
+    assert "slide" in line
+    summary = json.loads((d / "summary.json").read_text())
+    assert summary["converged"] is False
+    _, rows = read_csv(d / "history.csv")
+    assert [(int(r["step"]), int(r["increment"])) for r in rows] == [(0, 1)]
+    _, crows = read_csv(d / "contact.csv")
+    assert increments_of(crows) == [(0, 1)]
+
+
+def test_rerun_replaces_results(workdir):
+    d = workdir / "rerun_out"
+    first = cli("run", workdir / "good.toml", "--out", d, "--set", "step.1.increments=3")
+    assert first.status == 0 and first.stderr == "", str(first)
+    second = cli("run", workdir / "good.toml", "--out", d, "--set", "step.1.increments=2",
+                 "--set", "contact.0.mu=0.1")
+    assert second.status == 0, str(second)
+    assert len(second.stderr.splitlines()) == 1 and str(d) in second.stderr, str(second)
+    assert "Traceback" not in second.stderr
+    _, rows = read_csv(d / "history.csv")
+    assert [(int(r["step"]), int(r["increment"])) for r in rows] == [(0, 1), (1, 1), (1, 2)]
+    _, crows = read_csv(d / "contact.csv")
+    assert increments_of(crows) == [(0, 1), (1, 1), (1, 2)]
+    assert json.loads((d / "summary.json").read_text())["increments"] == 3
+    # --quiet: nothing on stdout, and the rerun is not announced either
+    third = cli("run", workdir / "good.toml", "--out", d, "--quiet")
+    assert third.status == 0, str(third)
+    assert third.stdout == "" and third.stderr == "", str(third)
+    _, rows = read_csv(d / "history.csv")
+    assert len(rows) == 4
+
+
+# --------------------------------------------------------------------------- mpirun
+
+def _mpirun(*args: Any) -> Outcome:
+    from dolfinx_friction import compat  # Open MPI 4 (Debian 12) / 5 (Debian 13) launchers
+    command = [*compat.mpirun_command(2), sys.executable, "-m", "dolfinx_friction",
+               *map(str, args)]
+    env = compat.mpirun_environment(cli_env())
+    proc = subprocess.run(command, capture_output=True, text=True, env=env, timeout=TIMEOUT)
+    return Outcome(command, proc.returncode, proc.stdout, compat.mpirun_stderr(proc.stderr))
+
+
+@pytest.mark.skipif(shutil.which("mpirun") is None, reason="mpirun not found")
+def test_mpirun_matches_serial(workdir, good_run):
+    # a bad scene: one line, from rank 0 only
+    bad = workdir / "case_mpi_bad.toml"
+    bad.write_text(toml_dumps(edited(GOOD, [("step.0.bc.1.on", "nowhere")])))
+    assert_one_line_error(_mpirun("run", bad, "--out", workdir / "never"),
+                          ["step.0.bc.1.on", "nowhere"])
+    # a good scene: the same results as the serial run
+    d = workdir / "mpi_out"
+    out = _mpirun("run", workdir / "good.toml", "--out", d, "--quiet")
+    assert out.status == 0 and out.stdout == "" and out.stderr == "", str(out)
+    serial_out, serial_dir = good_run
+    assert serial_out.status == 0, str(serial_out)
+    header, rows = read_csv(d / "history.csv")
+    serial_header, serial_rows = read_csv(serial_dir / "history.csv")
+    assert header == serial_header
+    assert len(rows) == len(serial_rows)
+    columns = [c for c in header if c.startswith("R_")]
+    # 1e-8 relative; components that vanish (round-off, ~1e-15 of the largest) are
+    # compared relative to 1e-6 of the largest reaction instead
+    scale = max(abs(float(r[c])) for r in serial_rows for c in columns)
+    for row, ref in zip(rows, serial_rows):
+        assert (row["step"], row["increment"]) == (ref["step"], ref["increment"])
+        for c in columns:
+            a, b = float(row[c]), float(ref[c])
+            assert abs(a - b) <= 1e-8 * max(abs(b), 1e-6 * scale), (row["step"], row["increment"],
+                                                                   c, a, b)
+    assert json.loads((d / "summary.json").read_text())["mpi_ranks"] == 2
+    _, crows = read_csv(d / "contact.csv")
+    _, serial_crows = read_csv(serial_dir / "contact.csv")
+    assert [(r["step"], r["increment"], r["node"], r["status"]) for r in crows] == \
+        [(r["step"], r["increment"], r["node"], r["status"]) for r in serial_crows]
