@@ -68,9 +68,7 @@ def _check(args, scene) -> None:
     problem = ContactProblem(scene, MPI.COMM_WORLD)
     # What the mesh alone cannot tell: the prescribed values of every step (overlapping
     # bc groups that disagree on a component).  Nothing is solved.
-    solver = Solver(problem)
-    for index in range(len(scene.steps)):
-        solver._step_loading(index)
+    Solver(problem).validate_steps()
     if MPI.COMM_WORLD.rank == 0:
         n_dofs = problem.layout.n_global * problem.gdim
         print(f"{args.scene}: ok ({problem.gdim}D, {len(scene.bodies)} bodies, "

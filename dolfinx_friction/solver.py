@@ -122,6 +122,29 @@ class Solver:
                 for f in self.problem.group_fields(group)]
         return self._unit_loads[group]
 
+    def validate_steps(self) -> None:
+        """Check the prescribed values of every step before solving anything (collective)."""
+        saved = (dict(self._bc_state), dict(self._load_state), dict(self._rigid_state))
+        try:
+            for index in range(len(self.problem.scene.steps)):
+                self._step_loading(index)
+        finally:
+            self._bc_state, self._load_state, self._rigid_state = saved
+
+    def _report_conflict(self, index: int, conflict: np.ndarray) -> None:
+        """Name the bc groups that prescribe different values to the same components."""
+        found = set()
+        for group, comps in self._bc_state.items():
+            rows = self.problem.owned_group_dofs(group)
+            for c, value in enumerate(comps):
+                if value is not None and conflict[rows[:, c]].any():
+                    found.add((group, "xyz"[c]))
+        found = sorted(set().union(*self.comm.allgather(found)))
+        groups = sorted({g for g, _ in found})
+        axes = "".join(sorted({a for _, a in found}))
+        raise ModelError(f"step.{index}: bc groups {', '.join(map(repr, groups))} overlap and "
+                         f"prescribe different values of component(s) {axes} to shared nodes")
+
     def _step_loading(self, index: int) -> _Loading:
         p, d = self.problem, self.gdim
         step = p.scene.steps[index]
@@ -151,10 +174,9 @@ class Solver:
                 count[rows] += 1.0
         mean = np.divide(total, count, out=np.zeros(n), where=count > 0)
         spread = np.divide(total_sq, count, out=np.zeros(n), where=count > 0) - mean ** 2
-        conflict = np.any(spread > 1e-24 * np.maximum(1.0, mean ** 2))
-        if self.comm.allreduce(int(conflict)):
-            raise ModelError(f"step.{index}: overlapping bc groups prescribe different values "
-                             f"for the same component")
+        conflict = spread > 1e-24 * np.maximum(1.0, mean ** 2)
+        if self.comm.allreduce(int(conflict.any())):
+            self._report_conflict(index, conflict)
         for group, (traction, pressure) in self._load_state.items():
             for owned, unit in self._loads(group):
                 vec = np.zeros(unit.shape[1])

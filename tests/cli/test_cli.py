@@ -416,10 +416,10 @@ CASES = [
     Case("u_3d_on_2d_mesh", ["step.0.bc.0.u", "2D"],
          [("step.0.bc.0.u", [0.0, -0.001, 0.0]), ("rigid.0.center", [0.5, -0.5, 0.0])],
          base="planar"),
-    Case("conflicting_bcs_check", ["step.0", "overlapping"],
+    Case("conflicting_bcs_check", ["step.0", "'side_x0'", "'top'", "overlap", "component(s) z"],
          [("step.0.bc", [{"on": "top", "u": [0.0, 0.0, -0.01]},
                          {"on": "side_x0", "u": [0.0, 0.0, 0.0]}])], base="rigid"),
-    Case("conflicting_bcs_later_step", ["step.1", "overlapping"],
+    Case("conflicting_bcs_later_step", ["step.1", "'side_x0'", "'top'", "overlap"],
          [("step.1", {"name": "hold", "bc": [{"on": "side_x0", "u": [0.0, 0.0, 0.0]}]})],
          base="rigid", command="run", args=["--out", "{d}/conflict_out", "--quiet"]),
     # meshes
