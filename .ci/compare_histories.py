@@ -42,16 +42,19 @@ def fail(message: str) -> "NoReturn":  # noqa: F821
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rtol", type=float, default=1e-6)
-    parser.add_argument("--label", action="append", default=[])
+    parser.add_argument("--label", action="append", default=[],
+                        help="names of the two files in the output (give it twice)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="print only failing components and the summary")
     parser.add_argument("files", nargs=2)
     args = parser.parse_args(argv)
-    labels = (args.label + ["A", "B"])[:2] if len(args.label) < 2 else args.label[:2]
+    labels = (args.label + ["A", "B"][len(args.label):])[:2]
 
     (cols_a, rows_a), (cols_b, rows_b) = read(args.files[0]), read(args.files[1])
     reactions = [c for c in cols_a if REACTION.match(c)]
     if not reactions:
         fail(f"{args.files[0]}: no reaction columns (R_<group>_<axis>)")
-    if reactions != [c for c in cols_b if REACTION.match(c)]:
+    if sorted(reactions) != sorted(c for c in cols_b if REACTION.match(c)):
         fail(f"the reaction columns differ: {reactions} vs "
              f"{[c for c in cols_b if REACTION.match(c)]}")
     if not rows_a:
@@ -69,7 +72,9 @@ def main(argv=None) -> int:
 
     worst = dict.fromkeys(reactions, 0.0)
     failures = []
-    print(f"{'step':>4} {'inc':>3} {'column':<28} {labels[0]:>26} {labels[1]:>26} {'rel. diff':>10}")
+    if not args.quiet:
+        print(f"{'step':>4} {'inc':>3} {'column':<28} {labels[0]:>26} {labels[1]:>26} "
+              f"{'rel. diff':>10}")
     for ra, rb in zip(rows_a, rows_b):
         for group, cols in groups.items():
             va = [float(ra[c]) for c in cols]
@@ -82,8 +87,9 @@ def main(argv=None) -> int:
                 rel = abs(a - b) / ref if ref > 0.0 else 0.0
                 worst[c] = max(worst[c], rel)
                 flag = "" if rel <= args.rtol else "  FAIL"
-                print(f"{key(ra)[0]:>4} {key(ra)[1]:>3} {c:<28} {a:>26.17g} {b:>26.17g} "
-                      f"{rel:>10.2e}{flag}")
+                if not args.quiet or flag:
+                        print(f"{key(ra)[0]:>4} {key(ra)[1]:>3} {c:<28} {a:>26.17g} {b:>26.17g} "
+                          f"{rel:>10.2e}{flag}")
                 if rel > args.rtol:
                     failures.append((key(ra), c, a, b, rel))
     print("worst relative difference per column: "

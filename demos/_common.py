@@ -92,7 +92,9 @@ def contact_state(result, pair: int = 0) -> dict:
     local = dict(X=inter.slaves.X[s], pressure=r.F_N / area, F_N=r.F_N, F_T=r.F_T,
                  area=area, status=r.status, g_N=r.g_N)
     parts = comm.allgather(local)
-    return {k: np.concatenate([p[k] for p in parts]) for k in local}
+    out = {k: np.concatenate([p[k] for p in parts]) for k in local}
+    out["X_all"] = np.concatenate(comm.allgather(inter.slaves.X))  # every slave node
+    return out
 
 
 def relerr(got: float, want: float) -> str:

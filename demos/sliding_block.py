@@ -50,7 +50,8 @@ def build_mesh(path: Path, n_block: int = 7, n_found: tuple[int, int] = (12, 6),
                       for _, c in gmsh.model.getBoundary([(2, s)], oriented=False)}
             for c in curves:
                 x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(1, c)
-                n = nx if abs(x1 - x0) > 1e-9 else ny if abs(y1 - y0) > 1e-9 else nz
+                dx, dy, dz = x1 - x0, y1 - y0, z1 - z0
+                n = nx if dx > max(dy, dz) else ny if dy > dz else nz
                 m.setTransfiniteCurve(c, n + 1)
             for _, s in gmsh.model.getBoundary([(3, vol)], oriented=False):
                 m.setTransfiniteSurface(s)
@@ -87,9 +88,9 @@ def main(argv=None) -> None:
     result, seconds = C.run_scene(scene, args)
     C.report(result, seconds)
     if not args.no_render:
-        C.render(result, "sliding_block_pressure", warp=50.0,
+        C.render(result, "sliding_block_pressure", warp=50.0, amplify="deformation",
                  title="block slid on a foundation, mu = 0.3")
-        C.render(result, "sliding_block_status", scalar="status", warp=50.0,
+        C.render(result, "sliding_block_status", scalar="status", warp=50.0, amplify="deformation",
                  title="block slid on a foundation, mu = 0.3")
     C.root_print("increment  slipping/active   -R_x/R_z (platen)")
     for inc in result.increments:

@@ -1,12 +1,24 @@
 """The dolfinx calls whose signature differs between dolfinx 0.5 and 0.9.
 
-Every function here branches on ``dolfinx.__version__``.  The 0.5 branch is
-tested (Debian 12: python3-dolfinx 0.5.2); the 0.9 branch (Debian 13) is
-written from the dolfinx 0.9 Python sources (``dolfinx/mesh.py``,
-``dolfinx/io/utils.py``, ``dolfinx/io/gmshio.py``, ``dolfinx/graph.py``) and
-mirrors what 0.9's own ``gmshio.model_to_mesh`` does.
+Every dolfinx / ufl / basix call whose spelling differs between the two
+supported releases lives here, and nothing else in the package (or its tests)
+branches on versions:
+
+* Debian 12 (bookworm): dolfinx 0.5.2, Python 3.11, numpy 1.24, PETSc 3.18,
+  Open MPI 4.1;
+* Debian 13 (trixie): dolfinx 0.9.0, Python 3.13, numpy 2.2, PETSc 3.22,
+  Open MPI 5.0.
+
+Both branches are tested: the 0.5 one natively, the 0.9 one by
+``.ci/debian13.sh`` (the whole suite, serially and on 2 ranks, in a trixie
+root filesystem), which also checks that a verification scene gives the same
+reactions on both releases within 1e-6 relative.  The 0.9 branch mirrors what
+0.9's own ``gmshio.model_to_mesh`` does.  The MPI launcher helpers at the end
+switch on the Open MPI version (``mpirun -q`` is gone in Open MPI 5).
 """
 from __future__ import annotations
+
+import re
 
 import numpy as np
 import dolfinx
@@ -175,11 +187,44 @@ def assemble_vector(L) -> np.ndarray:
     return out
 
 
+def scalar_constant(mesh: dolfinx.mesh.Mesh, value: float):
+    """A ``fem.Constant`` holding a real scalar (0.9 wants a numpy scalar of
+    ``dolfinx.default_scalar_type``; 0.5 takes a Python float)."""
+    import dolfinx.fem
+    if NEW_API:
+        return dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(value))
+    return dolfinx.fem.Constant(mesh, value)
+
+
+def geometry_dofmap(mesh: dolfinx.mesh.Mesh) -> np.ndarray:
+    """Geometry node indices of every local cell, (num_cells, nodes per cell).
+
+    0.9: ``mesh.geometry.dofmap`` is that 2D array; 0.5: an AdjacencyList.
+    """
+    dofmap = mesh.geometry.dofmap
+    if NEW_API:
+        return np.asarray(dofmap)
+    n = len(dofmap.offsets) - 1
+    return dofmap.array.reshape(n, dofmap.array.size // max(n, 1))
+
+
 def scalar_space(mesh: dolfinx.mesh.Mesh, degree: int):
     import dolfinx.fem
     if NEW_API:
         return dolfinx.fem.functionspace(mesh, ("Lagrange", degree))
     return dolfinx.fem.FunctionSpace(mesh, ("Lagrange", degree))
+
+
+# -------------------------------------------------------------------- plot
+def vtk_mesh(V):
+    """``(topology, cell_types, x)`` of a Lagrange space for VTK/pyvista, built on its dofs.
+
+    0.5: ``dolfinx.plot.create_vtk_mesh(V)``; renamed ``vtk_mesh`` in 0.9.
+    """
+    import dolfinx.plot
+    if NEW_API:
+        return dolfinx.plot.vtk_mesh(V)
+    return dolfinx.plot.create_vtk_mesh(V)
 
 
 # ------------------------------------------------------------------ output
@@ -234,3 +279,60 @@ def write_fields(path, field, spaces: dict, nodal: dict[str, np.ndarray], t: flo
             f = _output_function(values[:owned], spaces["vector_in" if vector else "scalar_in"],
                                  spaces["vector_out" if vector else "scalar_out"], name)
             xdmf.write_function(f, t)
+
+
+# ------------------------------------------------------------- MPI launcher
+def open_mpi_major() -> int:
+    """Major version of the Open MPI that mpi4py uses (4: Debian 12, 5: Debian 13); 0 if
+    the MPI library is not Open MPI."""
+    from mpi4py import MPI
+    match = re.search(r"Open MPI v(\d+)", MPI.Get_library_version())
+    return int(match.group(1)) if match else 0
+
+
+def mpirun_command(n: int) -> list[str]:
+    """``mpirun`` arguments that start ``n`` ranks on this machine (oversubscribed, not
+    bound to cores), as quietly as the launcher allows; append the program to run.
+
+    Open MPI 4 takes ``-q`` (no launcher messages when a rank exits non-zero); Open MPI 5
+    (PRRTE) rejects it and cannot be silenced: filter its stderr with
+    :func:`mpirun_stderr`.
+    """
+    quiet = ["-q"] if 0 < open_mpi_major() < 5 else []
+    return ["mpirun", *quiet, "-n", str(n), "--oversubscribe", "--bind-to", "none"]
+
+
+def mpirun_environment(env: dict[str, str]) -> dict[str, str]:
+    """``env`` plus what :func:`mpirun_command` needs: running as root allowed, no
+    cross-memory attach (often forbidden in containers); with Open MPI 5 also only the
+    self and shared-memory transports (its TCP transport warns that it finds no
+    reachable interface pairing inside a chroot).  Values already in ``env`` win."""
+    out = dict(env)
+    out.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+    out.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    out.setdefault("OMPI_MCA_btl_vader_single_copy_mechanism", "none")
+    if open_mpi_major() >= 5:
+        out.setdefault("OMPI_MCA_btl_sm_single_copy_mechanism", "none")
+        out.setdefault("OMPI_MCA_btl", "self,sm")
+    return out
+
+
+# Open MPI 5's own messages on stderr: framed notices ("prterun detected that one or
+# more processes exited with non-zero status ...") and PMIx error lines.
+_FRAME = re.compile(r"^-{20,}$")
+_PMIX = re.compile(r"^\[[^\]]*\] PMIX ERROR: ")
+
+
+def mpirun_stderr(text: str) -> str:
+    """The stderr of an :func:`mpirun_command` job without the launcher's own messages
+    (what Open MPI 4's ``-q`` suppresses); unchanged with Open MPI 4."""
+    if not open_mpi_major() >= 5:
+        return text
+    kept, framed = [], False
+    for line in text.splitlines(keepends=True):
+        if _FRAME.match(line.rstrip("\n")):
+            framed = not framed
+            continue
+        if not framed and not _PMIX.match(line):
+            kept.append(line)
+    return "".join(kept)

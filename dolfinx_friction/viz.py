@@ -24,9 +24,9 @@ two ranks carry the same values); the pieces are gathered to rank 0, which
 renders the whole picture.  Other ranks return ``None``.  Nodes on partition
 boundaries appear twice, which does not show.
 
-Higher-degree fields are drawn with VTK Lagrange cells built on the dofs
-(``dolfinx.plot.create_vtk_mesh(V)``; ``vtk_mesh`` from dolfinx 0.9); the
-contact surfaces use the face corners only (linear interpolation).
+Cells are built on the dofs (``dolfinx.plot.create_vtk_mesh(V)``; renamed
+``vtk_mesh`` in dolfinx 0.9); higher-degree cells and contact faces are drawn
+through their corner nodes only (P1 interpolation of the displacement).
 """
 from __future__ import annotations
 
@@ -53,10 +53,24 @@ _CORNERS = {"L2": [0, 1], "L3": [0, 1], "T3": [0, 1, 2], "T6": [0, 1, 2],
 def vtk_mesh(V):
     """``(topology, cell_types, x)`` of a Lagrange space: dolfinx 0.5 ``create_vtk_mesh``,
     renamed ``vtk_mesh`` in dolfinx 0.9."""
-    import dolfinx.plot
-    if hasattr(dolfinx.plot, "vtk_mesh"):
-        return dolfinx.plot.vtk_mesh(V)
-    return dolfinx.plot.create_vtk_mesh(V)
+    from dolfinx_friction import compat  # imports dolfinx: after pyvista
+    return compat.vtk_mesh(V)
+
+
+# VTK higher-order cell types -> (linear type, number of corners); corners come first
+_LINEAR = {69: (5, 3), 70: (9, 4), 71: (10, 4), 72: (12, 8),  # Lagrange cells
+           22: (5, 3), 23: (9, 4), 28: (9, 4), 24: (10, 4), 25: (12, 8), 29: (12, 8)}
+
+
+def _linear_cells(topology: np.ndarray, cell_types: np.ndarray):
+    """Corner-only (P1) cells of a higher-order VTK cell array (one cell type per mesh)."""
+    topology, cell_types = np.asarray(topology), np.asarray(cell_types)
+    if len(cell_types) == 0 or int(cell_types[0]) not in _LINEAR:
+        return topology, cell_types
+    kind, nc = _LINEAR[int(cell_types[0])]
+    cells = topology.reshape(len(cell_types), -1)[:, 1:1 + nc]
+    out = np.hstack([np.full((len(cells), 1), nc), cells]).ravel()
+    return out, np.full(len(cells), kind, dtype=cell_types.dtype)
 
 
 def _problem_of(result):
@@ -108,8 +122,9 @@ def _pad3(x: np.ndarray) -> np.ndarray:
     return out
 
 
-def _local_pieces(problem, warp: float) -> dict:
+def _local_pieces(problem, warp: float, amplify: str) -> dict:
     """Everything this rank contributes to the picture, as plain arrays."""
+    from mpi4py import MPI
     problem.update_fields()
     d = problem.gdim
     bodies, slaves, masters = [], [], []
@@ -117,9 +132,16 @@ def _local_pieces(problem, warp: float) -> dict:
     master_groups = {c.master for c in problem.scene.contacts
                      if problem.scene.rigid(c.master) is None}
     for field in problem.fields:
-        topology, cell_types, _ = vtk_mesh(field.V)
+        topology, cell_types = _linear_cells(*vtk_mesh(field.V)[:2])
         u = field.u.x.array.reshape(-1, d)
-        x = _pad3(field.X + warp * u)
+        if amplify == "deformation":  # scale only what differs from the mean translation
+            owned = u[: field.n_owned]
+            total = problem.comm.allreduce(owned.sum(axis=0), op=MPI.SUM)
+            count = problem.comm.allreduce(len(owned), op=MPI.SUM)
+            mean = total / max(count, 1)
+            x = _pad3(field.X + mean + warp * (u - mean))
+        else:
+            x = _pad3(field.X + warp * u)
         values = _nodal_contact(problem, field)
         bodies.append(dict(name=field.body.name, topology=np.asarray(topology),
                            cell_types=np.asarray(cell_types), x=x))
@@ -139,7 +161,8 @@ def _local_pieces(problem, warp: float) -> dict:
     u = problem.u.getArray(readonly=True)
     for r in problem.scene.rigids:
         rows = problem.rigid_dofs(r.name).ravel()
-        rigids.append(dict(rigid=r, U=_pad3(u[rows][None] * warp)[0] if len(rows) else None))
+        scale = warp if amplify == "total" else 1.0
+        rigids.append(dict(rigid=r, U=_pad3(u[rows][None] * scale)[0] if len(rows) else None))
     return dict(bodies=bodies, slaves=slaves, masters=masters, rigids=rigids)
 
 
@@ -234,22 +257,24 @@ def _status_cmap():
 
 
 def _scalar_args(scalar: str, clim: tuple[float, float], bar: bool, title: str) -> dict:
-    common = dict(show_scalar_bar=bar)
+    common = dict(show_scalar_bar=bar, nan_color=STATUS_COLORS[0])
+    bar_args = dict(title="", vertical=False, height=0.09, width=0.5, position_x=0.33,
+                    position_y=0.05 if scalar == "status" else 0.02, title_font_size=16, label_font_size=14, color="black")
     if scalar == "status":
         return dict(common, cmap=_status_cmap(), clim=[0.5, 3.5], n_colors=3,
-                    scalar_bar_args=dict(title="status", n_labels=0, vertical=True,
-                                         height=0.3, position_x=0.86, position_y=0.35),
+                    scalar_bar_args=dict(bar_args, n_labels=0),
                     annotations={1.0: "open", 2.0: "stick", 3.0: "slip"})
     return dict(common, cmap="plasma", clim=list(clim),
-                scalar_bar_args=dict(title=title, vertical=True, height=0.5, fmt="%.3g",
-                                     position_x=0.84, position_y=0.25))
+                scalar_bar_args=dict(bar_args, fmt="%.3g", n_labels=5))
 
 
 def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact_pressure",
-           warp: float = 1.0, panels: Optional[Sequence[str]] = None,
+           warp: float = 1.0, amplify: str = "total",
+           panels: Optional[Sequence[str]] = None,
            title: Optional[str] = None, window_size: Optional[tuple[int, int]] = None,
            show_edges: bool = True, contact_margin: float = 0.75,
-           clim: Optional[tuple[float, float]] = None) -> Optional[Path]:
+           clim: Optional[tuple[float, float]] = None,
+           view: Optional[Sequence[float]] = None) -> Optional[Path]:
     """Render the current state of a solved problem into ``png_path`` (collective).
 
     ``result_or_problem``: a :class:`~dolfinx_friction.api.RunResult` or a
@@ -258,17 +283,24 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
     elsewhere on the slave surface) or ``"status"`` (open / stick / slip).
     ``warp``: scale of the displacements (rigid obstacles are translated by
     ``warp`` times their displacement, so that the picture stays consistent).
+    ``amplify="deformation"`` scales only the part of each body's displacement
+    that differs from its mean translation (useful after a large slide), and
+    draws the rigid obstacles at their true position.
     ``panels``: any of ``"overview"``, ``"contact"`` (default both; only the
     overview when nothing is in contact).  ``contact_margin``: the close-up
     shows the bounding box of the closed contact nodes enlarged by this
     fraction of its size on every side (at least a few element sizes).
+    ``view``: 3D overview camera direction (from the scene towards the camera,
+    z up); default isometric ``(1, 1, 1)``.  2D scenes are always seen along ``-z``.
     Returns the path on rank 0, ``None`` on the other ranks.
     """
+    if amplify not in ("total", "deformation"):
+        raise ValueError(f"amplify must be 'total' or 'deformation', not {amplify!r}")
     if scalar not in ("contact_pressure", "status"):
         raise ValueError(f"scalar must be 'contact_pressure' or 'status', not {scalar!r}")
     problem = _problem_of(result_or_problem)
     comm = problem.comm
-    pieces = comm.gather(_local_pieces(problem, warp), root=0)
+    pieces = comm.gather(_local_pieces(problem, warp, amplify), root=0)
     if comm.rank != 0:
         return None
     data = _merge(pieces)
@@ -310,6 +342,7 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
             view_lo, view_hi = lo - pad, hi + pad
             if gdim == 3:
                 view_lo[2], view_hi[2] = lo[2] - pad, hi[2] + pad
+            view_lo, view_hi = np.maximum(view_lo, bounds[0]), np.minimum(view_hi, bounds[1])
         else:
             view_lo, view_hi = bounds
         # bodies (in the 3D close-up only the slave bodies, seen from the master side)
@@ -340,11 +373,16 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
         first_bar = col == len(panels) - 1
         for s in data["slaves"]:
             poly = _facet_polydata(s["x"] + lift)
-            poly.point_data[bar_title] = s[values_key].ravel()
+            values = s[values_key].ravel().astype(float)
+            if scalar == "contact_pressure":  # nodes not in contact: grey
+                values = np.where(s["code"].ravel() >= 2, values, np.nan)
+                poly.point_data[bar_title] = values
+            else:  # categories are not interpolated: a facet takes its weakest corner's state
+                poly.cell_data[bar_title] = s["code"].min(axis=1).astype(float)
             args = _scalar_args(scalar, clim, first_bar, bar_title)
             first_bar = False
             if gdim == 2:
-                pl.add_mesh(poly, scalars=bar_title, line_width=6 if close_up else 4,
+                pl.add_mesh(poly, scalars=bar_title, line_width=8 if close_up else 6,
                             interpolate_before_map=True, **args)
             else:
                 pl.add_mesh(poly, scalars=bar_title, show_edges=close_up, edge_color="#404040",
@@ -352,12 +390,12 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
                             **args)
             if close_up or gdim == 2:
                 pts = pyvista.PolyData(s["x"].reshape(-1, 3) + 2 * lift)
-                pts.point_data[bar_title] = s[values_key].ravel()
+                pts.point_data[bar_title] = values
                 keep = s["code"].ravel() >= 1
                 pts = pts.extract_points(np.flatnonzero(keep), adjacent_cells=False) \
                     if keep.any() else pts
                 pl.add_mesh(pts, scalars=bar_title, render_points_as_spheres=True,
-                            point_size=12 if close_up else 7,
+                            point_size=14 if close_up else 10,
                             **dict(_scalar_args(scalar, clim, False, bar_title)))
         # camera
         aspect = window_size[0] / len(panels) / window_size[1]
@@ -369,11 +407,18 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
             up = np.array([0.0, 1.0, 0.0]) if abs(n[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
             _fit_parallel(pl, view_lo, view_hi, n, up, aspect)
         else:
-            pl.view_isometric()
-            pl.reset_camera(bounds=[view_lo[0], view_hi[0], view_lo[1], view_hi[1],
-                                    view_lo[2], view_hi[2]])
+            box = [view_lo[0], view_hi[0], view_lo[1], view_hi[1], view_lo[2], view_hi[2]]
+            if view is None:
+                pl.view_isometric()
+            else:
+                direction = np.asarray(view, float) / np.linalg.norm(view)
+                c = 0.5 * (view_lo + view_hi)
+                dist = 3.0 * float(np.linalg.norm(view_hi - view_lo))
+                pl.camera_position = [tuple(c + dist * direction), tuple(c), (0.0, 0.0, 1.0)]
+            pl.reset_camera(bounds=box)
         label = title if (title and col == 0) else None
-        text = {"overview": f"deformed, displacements x{warp:g}",
+        text = {"overview": f"deformed, displacements x{warp:g}" if amplify == "total"
+                else f"deformed, deformation x{warp:g} (about the mean translation)",
                 "contact": "contact zone"}[panel]
         if close_up and gdim == 3:
             text += " (slave surface seen from the master side)"
@@ -381,6 +426,14 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
                     font_size=10, color="black")
         if gdim == 3:
             pl.add_axes(color="black")
+        if col == len(panels) - 1:  # the scalar bar's title, left of the bar
+            width = window_size[0] / len(panels)
+            pl.add_text(bar_title, position=(0.03 * width, 0.045 * window_size[1]),
+                        font_size=11, color="black")
+    for bar in pl.scalar_bars.values():  # readable over the mesh
+        bar.SetDrawBackground(True)
+        bar.GetBackgroundProperty().SetColor(1.0, 1.0, 1.0)
+        bar.GetBackgroundProperty().SetOpacity(0.85)
     pl.screenshot(str(png_path))
     pl.close()
     return png_path
@@ -402,7 +455,7 @@ def _fit_parallel(pl, lo: np.ndarray, hi: np.ndarray, towards_camera: np.ndarray
     pl.camera_position = [tuple(c + dist * n), tuple(c), tuple(up)]
     pl.enable_parallel_projection()
     pl.reset_camera_clipping_range()
-    pl.camera.parallel_scale = 0.55 * max(h, w / aspect, 1e-30)
+    pl.camera.parallel_scale = 0.5 * max(1.3 * h, 1.1 * w / aspect, 1e-30)
 
 
 def _mean_normal(slaves: list[dict]) -> np.ndarray:

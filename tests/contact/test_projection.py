@@ -85,7 +85,7 @@ def test_flat_face_projection_is_analytic(name):
     # random points anywhere above/below the face (some beyond its edges)
     p = qc + rng.uniform(-1, 1, (100, d))
     xi_ref = xc + np.linalg.solve(np.einsum("nad,nbd->nab", J, J),
-                                  np.einsum("nad,nd->na", J, p - qc))
+                                  np.einsum("nad,nd->na", J, p - qc)[..., None])[..., 0]
     pr = project(face, p, x)
     assert pr.converged.all()
     np.testing.assert_allclose(pr.xi, xi_ref, rtol=0, atol=1e-13)

@@ -22,6 +22,7 @@ import dolfinx.fem  # noqa: E402
 import dolfinx.mesh  # noqa: E402
 import ufl  # noqa: E402
 
+from dolfinx_friction import compat  # noqa: E402
 from dolfinx_friction.gmsh_io import (  # noqa: E402
     BodyMesh, MeshError, MeshSet, _gmsh_initialized, load_mesh)
 
@@ -193,8 +194,7 @@ def num_cells(body: BodyMesh) -> int:
 
 
 def integrate(mesh, measure) -> float:
-    one = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0)) \
-        if hasattr(dolfinx, "default_scalar_type") else dolfinx.fem.Constant(mesh, 1.0)
+    one = compat.scalar_constant(mesh, 1.0)
     return comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(one * measure)), op=MPI.SUM)
 
 
@@ -218,7 +218,7 @@ def check_node_order(body: BodyMesh):
     cmap = g.cmap
     cell = getattr(basix.CellType, body.mesh.topology.cell_name())
     degree = cmap.degree
-    dofmap = getattr(g.dofmap, "array", g.dofmap)
+    dofmap = compat.geometry_dofmap(body.mesh)
     tdim = body.mesh.topology.dim
     dofmap = np.asarray(dofmap).reshape(body.mesh.topology.index_map(tdim).size_local, -1)
     ref = basix.create_element(basix.ElementFamily.P, cell, degree,

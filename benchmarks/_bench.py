@@ -1,0 +1,314 @@
+"""Plumbing shared by the benchmark scripts ``benchmarks/bench_*.py``.
+
+* One thread per process (``OMP_NUM_THREADS`` etc. set before numpy/PETSc load),
+  so that CPU time is compute time and CalculiX (run with 1 thread) is compared
+  like for like.
+* :func:`timed_run` runs a scene in memory and returns the numbers the
+  benchmarks tabulate.  Phase times come from the solver's own timers, which
+  (see :func:`phase_clock`) record this process's CPU time
+  (:func:`time.process_time`) next to the wall clock: the benchmark machine is
+  shared with other jobs, and time-sharing inflates wall times by an unknown,
+  varying factor, so the tables show CPU seconds and list the wall seconds too.
+* :func:`machine` describes the machine (nproc, CPU, RAM, date, load average),
+  :func:`write_section` replaces one ``## `` section of ``benchmarks/RESULTS.md``
+  and leaves every other section alone.
+* :func:`demo_module` imports a demo script (``demos/<name>.py``) to reuse its
+  ``build_mesh``.
+
+Scratch files (meshes, CalculiX decks) go to ``$BENCH_WORK`` (default
+``/tmp/dolfinx_friction_bench``), never into the repository.
+"""
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import contextlib  # noqa: E402
+import datetime  # noqa: E402
+import gc  # noqa: E402
+import importlib.util  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import re  # noqa: E402
+import resource  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import types  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+BENCH = ROOT / "benchmarks"
+FIGURES = BENCH / "figures"
+RESULTS = BENCH / "RESULTS.md"
+DEMOS = ROOT / "demos"
+WORK = Path(os.environ.get("BENCH_WORK", "/tmp/dolfinx_friction_bench"))
+for _p in (str(ROOT), str(DEMOS)):
+    if _p not in sys.path:
+        sys.path.insert(0, _p)
+
+#: the interpreter that has pyvista (the demos import it) and dolfinx
+PYTHON = sys.executable
+MPIRUN_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
+
+
+def work_dir(name: str) -> Path:
+    d = WORK / name
+    d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+# ----------------------------------------------------------------------------- machine
+def load_average() -> float:
+    return os.getloadavg()[0]
+
+
+def machine() -> dict:
+    cpu = "unknown"
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    mem = 0.0
+    with contextlib.suppress(OSError, ValueError, IndexError):
+        mem = int(Path("/proc/meminfo").read_text().split()[1]) / 2 ** 20
+    return {"nproc": os.cpu_count(), "cpu": cpu, "ram_gib": round(mem, 1),
+            "date": datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
+            "load": [round(x, 2) for x in os.getloadavg()],
+            "python": platform.python_version()}
+
+
+def machine_line(m: dict, load_end: float | None = None) -> str:
+    end = f" / {load_end:.1f} at the end" if load_end is not None else ""
+    return (f"machine: {m['nproc']} cores (nproc), CPU `{m['cpu']}`, {m['ram_gib']:.0f} GiB RAM, "
+            f"{m['date']}; 1-min load average {m['load'][0]:.1f} at the start{end} "
+            f"(other jobs share the machine)")
+
+
+def peak_rss_mib() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+# ----------------------------------------------------------------------------- runs
+class _Stamp(float):
+    """A wall-clock reading that also carries the process CPU time; differences keep both."""
+
+    cpu: float
+
+    def __new__(cls, wall: float, cpu: float):
+        obj = super().__new__(cls, wall)
+        obj.cpu = cpu
+        return obj
+
+    def __sub__(self, other):
+        return _Stamp(float(self) - float(other), self.cpu - getattr(other, "cpu", 0.0))
+
+
+def _stamp() -> _Stamp:
+    return _Stamp(time.perf_counter(), time.process_time())
+
+
+@contextlib.contextmanager
+def phase_clock(cpu_phases: dict):
+    """Let the solver's phase timers record CPU seconds (into ``cpu_phases``) next to the
+    wall seconds they normally keep (the package is not modified: its modules' ``time``
+    is swapped for a clock whose readings carry both, and ``Timers.add`` is wrapped)."""
+    import dolfinx_friction.api as api
+    import dolfinx_friction.solver as solver
+    from dolfinx_friction.problem import Timers
+    shim = types.SimpleNamespace(perf_counter=_stamp)
+    old = api.time, solver.time, Timers.add
+
+    def add(self, phase, seconds):
+        old[2](self, phase, float(seconds))
+        cpu_phases[phase] = cpu_phases.get(phase, 0.0) + getattr(seconds, "cpu", 0.0)
+
+    api.time = solver.time = shim
+    Timers.add = add
+    try:
+        yield
+    finally:
+        api.time, solver.time, Timers.add = old
+
+
+class _Stop(Exception):
+    pass
+
+
+def _run_first(scene, comm, max_increments: int, **kwargs):
+    """Like ``api.run(write=False)``, but stop after ``max_increments`` converged increments."""
+    from dolfinx_friction.api import RunResult
+    from dolfinx_friction.problem import ContactProblem
+    from dolfinx_friction.solver import Solver
+    start = _stamp()
+    problem = ContactProblem(scene, comm)
+    solver = Solver(problem, petsc_options=kwargs.get("petsc_options"),
+                    reuse_factorisation=kwargs.get("reuse_factorisation", False))
+    solver.timers.add("setup", _stamp() - start)
+    increments = []
+
+    def record(inc):
+        increments.append(inc)
+        if len(increments) >= max_increments:
+            raise _Stop
+
+    try:
+        summary = solver.run(record)
+    except _Stop:
+        summary = solver.summary
+    return RunResult(problem, summary, increments, None)
+
+
+def timed_run(scene, comm=None, max_increments: int | None = None, **kwargs):
+    """Run ``scene`` in memory; return ``(RunResult, numbers)``.
+
+    ``numbers``: dofs, wall and cpu seconds of the whole run, Newton iterations,
+    cutbacks, iterations per increment, phase seconds (``phases``: CPU, ``phases_wall``:
+    wall clock; the slowest rank's), load average, peak RSS.
+    ``max_increments``: stop after that many converged increments.
+    """
+    from mpi4py import MPI
+
+    from dolfinx_friction.api import run
+    comm = comm or MPI.COMM_WORLD
+    clear_petsc_options()
+    gc.collect()
+    load0 = load_average()
+    comm.barrier()
+    w0, c0 = time.perf_counter(), time.process_time()
+    cpu_phases: dict = {}
+    with phase_clock(cpu_phases):
+        if max_increments:
+            result = _run_first(scene, comm, max_increments, **kwargs)
+        else:
+            result = run(scene, write=False, comm=comm, **kwargs)
+    comm.barrier()
+    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+    s = result.summary
+    # phases are per rank; report the slowest rank (what the wall clock waits for)
+    phases_wall = {k: comm.allreduce(float(v), op=MPI.MAX) for k, v in s.timers.phases.items()}
+    phases = {k: comm.allreduce(cpu_phases.get(k, 0.0), op=MPI.MAX) for k in phases_wall}
+    numbers = {
+        "dofs": int(result.problem.u.getSize()),
+        "ranks": comm.size,
+        "wall": comm.allreduce(wall, op=MPI.MAX),
+        "cpu": comm.allreduce(cpu, op=MPI.MAX),
+        "newton": s.newton_iterations,
+        "cutbacks": s.cutbacks,
+        "increments": s.increments,
+        "iterations": [inc.iterations for inc in result.increments],
+        "phases": phases,
+        "phases_wall": phases_wall,
+        "cpu_per_rank": comm.allgather(cpu),
+        "load": [load0, load_average()],
+        "rss_mib": comm.allreduce(peak_rss_mib(), op=MPI.MAX),
+    }
+    return result, numbers
+
+
+def clear_petsc_options(prefix: str = "dolfinx_friction_") -> None:
+    """Forget the solver options an earlier run left in PETSc's global options database.
+
+    ``LinearSolver`` writes its defaults there only when the key is not set yet and never
+    removes them, so without this a second ``run()`` in one process inherits the first
+    run's linear solver (e.g. GMRES after ``reuse_factorisation=True``).
+    """
+    from petsc4py import PETSc
+    opts = PETSc.Options()
+    for key in list(opts.getAll()):
+        if key.startswith(prefix):
+            opts.delValue(key)
+
+
+def demo_module(name: str):
+    """Import ``demos/<name>.py`` (None if it does not exist)."""
+    path = DEMOS / f"{name}.py"
+    if not path.exists():
+        return None
+    if "_common" not in sys.modules:
+        try:  # the demos' helper imports pyvista (in .venv); without it a stub will do
+            import _common  # noqa: F401
+        except ImportError:
+            stub = types.ModuleType("_common")
+            stub.HERE = DEMOS
+            sys.modules["_common"] = stub
+    spec = importlib.util.spec_from_file_location(f"demo_{name}", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+# ----------------------------------------------------------------------------- workers
+def run_worker(script: Path, args: list[str], ranks: int = 1, timeout: float = 3600.0,
+               env: dict | None = None) -> dict:
+    """Run ``script --worker ARGS`` (under ``mpirun -n ranks`` if ranks > 1) and return the
+    JSON dict it prints on its last line starting with ``RESULT ``."""
+    cmd = [PYTHON, str(script), "--worker", *args]
+    if ranks > 1:
+        cmd = ["mpirun", "-n", str(ranks), "--bind-to", "none", *cmd]
+    full_env = dict(os.environ, **MPIRUN_ENV, **(env or {}))
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=full_env)
+    for line in reversed(proc.stdout.splitlines()):
+        if line.startswith("RESULT "):
+            return json.loads(line[len("RESULT "):])
+    tail = "\n".join((proc.stdout + proc.stderr).splitlines()[-25:])
+    raise RuntimeError(f"worker {' '.join(cmd)} failed (exit {proc.returncode}):\n{tail}")
+
+
+def emit(result: dict) -> None:
+    """Print a worker's result (rank 0 only)."""
+    from mpi4py import MPI
+    if MPI.COMM_WORLD.rank == 0:
+        print("RESULT " + json.dumps(result), flush=True)
+
+
+# ----------------------------------------------------------------------------- output
+def write_section(title: str, body: str) -> None:
+    """Replace (or append) the section ``## title`` of RESULTS.md; other sections are kept."""
+    text = RESULTS.read_text() if RESULTS.exists() else "# Benchmarks\n"
+    block = f"## {title}\n\n{body.strip()}\n"
+    pattern = re.compile(rf"^## {re.escape(title)}\n.*?(?=^## |\Z)", re.S | re.M)
+    if pattern.search(text):
+        text = pattern.sub(lambda _: block + "\n", text, count=1)
+    else:
+        text = text.rstrip("\n") + "\n\n" + block
+    RESULTS.write_text(text.rstrip("\n") + "\n")
+
+
+def table(header: list[str], rows: list[list], align: str | None = None) -> str:
+    align = align or "l" + "r" * (len(header) - 1)
+    sep = ["---:" if a == "r" else "---" for a in align]
+    lines = ["| " + " | ".join(header) + " |", "| " + " | ".join(sep) + " |"]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def pyplot():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    FIGURES.mkdir(parents=True, exist_ok=True)
+    return plt
+
+
+def pareto(points: list[tuple[float, float]]) -> list[int]:
+    """Indices of the points (time, error) that no other point beats in both."""
+    order = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))
+    front, best = [], float("inf")
+    for i in order:
+        if points[i][1] < best:
+            front.append(i)
+            best = points[i][1]
+    return front
+
+
+def fmt_s(x: float) -> str:
+    return f"{x:.3g}" if x < 100 else f"{x:.0f}"

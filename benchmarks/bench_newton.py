@@ -1,0 +1,223 @@
+"""Newton convergence of the exact ("consistent") and CalculiX's ("calculix") contact tangent.
+
+    python benchmarks/bench_newton.py            # every demo scene as it is
+    python benchmarks/bench_newton.py --quick    # only the first 4 increments of each demo (< 2 min)
+    python benchmarks/bench_newton.py --demos incline,sliding_block --no-results
+
+For every demo of ``demos/`` that exists (sliding_block, incline, hertz_cylinder,
+hertz_sphere, cattaneo_mindlin, ironing), its scene file is run twice, serially and in
+memory, with ``tangent = "consistent"`` and with ``tangent = "calculix"`` on every contact
+pair; everything else (mesh, laws, increments, Newton tolerance ``newton_rtol`` = 1e-9 of
+the first residual of each increment, ``pairing_iterations``) is the scene's own.  A demo
+whose mesh file is missing has it built by the demo's ``build_mesh`` (default resolution)
+into the scratch directory.
+
+Per converged increment: Newton iterations, and the observed order
+``q = log(e_{k+1}) / log(e_k)`` with ``e = r / r_0`` on the last two iterates with
+``1e-10 < e < 1`` (``q ~ 2``: quadratic; ``q ~ 1``... : linear).  Reported per demo and
+tangent: iterations per increment (median, mean, max), the median q, cutbacks, total Newton
+iterations and CPU time.  Chart: ``e`` against the iteration for one increment per demo (the
+increment where the two tangents differ most), both tangents:
+``benchmarks/figures/newton_residuals.png``.
+
+Target: median <= 3 Newton iterations per increment at the default tolerance.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import statistics
+import sys
+import traceback
+from pathlib import Path
+
+import _bench as B  # noqa: I001
+import numpy as np
+
+DEMOS = ("sliding_block", "incline", "hertz_cylinder", "hertz_sphere", "cattaneo_mindlin",
+         "ironing")
+TANGENTS = ("consistent", "calculix")
+E_MIN = 1e-10
+QUICK_INCREMENTS = 4
+
+
+def demo_scene(name: str):
+    """The demo's scene (None if the demo does not exist), its mesh built if missing."""
+    from dolfinx_friction.scene import load_scene
+    toml = B.DEMOS / f"{name}.toml"
+    if not toml.exists() or not (B.DEMOS / f"{name}.py").exists():
+        return None
+    scene = load_scene(toml)
+    mesh = Path(scene.mesh)
+    if not mesh.exists():
+        built = B.work_dir("newton") / mesh.name
+        if not built.exists():
+            B.demo_module(name).build_mesh(built)
+        scene = dataclasses.replace(scene, mesh=built)
+    return scene
+
+
+def with_tangent(scene, tangent: str):
+    contacts = tuple(dataclasses.replace(c, tangent=tangent) for c in scene.contacts)
+    out = dataclasses.replace(scene.output, fields=False, contact_table=False)
+    return dataclasses.replace(scene, contacts=contacts, output=out)
+
+
+def order(residuals: list[float]) -> float:
+    """``log(e_{k+1}) / log(e_k)`` on the last two iterates with 1e-10 < e < 1."""
+    r0 = residuals[0]
+    if r0 <= 0:
+        return math.nan
+    e = [r / r0 for r in residuals[1:] if E_MIN < r / r0 < 1.0]
+    if len(e) < 2:
+        return math.nan
+    return math.log(e[-1]) / math.log(e[-2])
+
+
+def run_demo(name: str, tangent: str, quick: bool) -> dict:
+    scene = demo_scene(name)
+    row = {"demo": name, "tangent": tangent}
+    try:
+        result, num = B.timed_run(with_tangent(scene, tangent),
+                                  max_increments=QUICK_INCREMENTS if quick else None)
+    except Exception as e:  # noqa: BLE001 - reported
+        traceback.print_exc(limit=3)
+        row.update(ok=False, error=f"{type(e).__name__}: {e}".splitlines()[0][:200])
+        return row
+    incs = [{"step": i.step, "increment": i.increment, "t": i.t, "iterations": i.iterations,
+             "residuals": [float(r) for r in i.residuals], "q": order(i.residuals),
+             "active": i.active, "slipping": i.slipping} for i in result.increments]
+    its = [i["iterations"] for i in incs]
+    qs = [i["q"] for i in incs if math.isfinite(i["q"])]
+    row.update(num)
+    row.update(ok=True, increments_data=incs, median_its=statistics.median(its),
+               mean_its=float(np.mean(its)), max_its=max(its),
+               median_q=statistics.median(qs) if qs else math.nan,
+               min_q=min(qs) if qs else math.nan, dim=result.problem.gdim,
+               mu=max((c.mu for c in scene.contacts), default=0.0))
+    return row
+
+
+def chart(rows: list[dict], machine: dict) -> Path:
+    plt = B.pyplot()
+    demos = [d for d in dict.fromkeys(r["demo"] for r in rows)
+             if all(r["ok"] for r in rows if r["demo"] == d)]
+    n = max(len(demos), 1)
+    cols = min(n, 3)
+    nrows = math.ceil(n / cols)
+    fig, axes = plt.subplots(nrows, cols, figsize=(5.2 * cols, 4.2 * nrows), dpi=100,
+                             squeeze=False)
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    for ax, demo in zip(axes.ravel(), demos):
+        by = {r["tangent"]: r for r in rows if r["demo"] == demo}
+        # the increment (present in both runs) where the iteration counts differ most
+        keys = {t: {(i["step"], round(i["t"], 9)): i for i in by[t]["increments_data"]}
+                for t in by}
+        common = set.intersection(*(set(k) for k in keys.values()))
+        pick = max(common, key=lambda k: (keys["calculix"][k]["iterations"]
+                                          - keys["consistent"][k]["iterations"],
+                                          keys["consistent"][k]["iterations"], k[1]))
+        for t, style in (("consistent", "o-"), ("calculix", "s--")):
+            inc = keys[t][pick]
+            r = np.array(inc["residuals"])
+            q = inc["q"]
+            ax.semilogy(range(len(r)), np.maximum(r / r[0], 1e-17), style, ms=4,
+                        label=f"{t}: {inc['iterations']} its, q = {q:.2f}")
+        ax.axhline(1e-9, color="grey", lw=0.8, ls=":")
+        inc = keys["consistent"][pick]
+        ax.set_title(f"{demo}: step {inc['step']}, increment {inc['increment']} "
+                     f"(t = {inc['t']:.3g})", fontsize=9)
+        ax.set_xlabel("Newton iteration")
+        ax.set_ylabel("r / r0")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"Residual history, exact vs CalculiX tangent (tolerance 1e-9 r0, dotted); "
+                 f"load {machine['load'][0]:.1f} on {machine['nproc']} cores", fontsize=10)
+    fig.tight_layout()
+    path = B.FIGURES / "newton_residuals.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def report(rows, machine, load_end, quick, figure, missing) -> str:
+    out = [
+        "`benchmarks/bench_newton.py`" + (" --quick" if quick else "") + ": every demo scene "
+        "as it is (mesh, law, K, mu, increments, tolerance 1e-9 r0), run with the exact "
+        "(`tangent = \"consistent\"`) and with CalculiX's (`\"calculix\"`) tangent; serial, "
+        "MUMPS." + (f" Quick mode: only the first {QUICK_INCREMENTS} increments of each demo."
+                    if quick else ""),
+        "",
+        f"* {B.machine_line(machine, load_end)}",
+        "* q = log(e_k+1)/log(e_k), e = r/r0, on the last two iterates with 1e-10 < e < 1, per "
+        "increment (2 = quadratic); 'median q' over the increments that have two such iterates.",
+        "* time: CPU seconds of the run (single thread; wall times inflated by the other jobs).",
+        "",
+    ]
+    if missing:
+        out += [f"Demos not (yet) in `demos/` and so not run: {', '.join(missing)}.", ""]
+    table_rows = []
+    for r in rows:
+        if not r["ok"]:
+            table_rows.append([r["demo"], r["tangent"]] + ["-"] * 9 + ["failed: " + r["error"]])
+            continue
+        table_rows.append([
+            r["demo"], r["tangent"], f"{r['dim']}D", f"{r['dofs']:,}", r["increments"],
+            f"{r['median_its']:g}", f"{r['mean_its']:.2f}", r["max_its"],
+            f"{r['median_q']:.2f}", r["cutbacks"], r["newton"],
+            f"{B.fmt_s(r['cpu'])} (load {r['load'][0]:.1f})"])
+    out.append(B.table(["demo", "tangent", "dim", "dofs", "increments", "median its/inc",
+                        "mean its/inc", "max its", "median q", "cutbacks", "Newton its total",
+                        "CPU [s]"], table_rows, "llrrrrrrrrrr"))
+    out.append("")
+    ok = [r for r in rows if r["ok"] and r["tangent"] == "consistent"]
+    if ok:
+        all_its = [i["iterations"] for r in ok for i in r["increments_data"]]
+        med = statistics.median(all_its)
+        out.append(f"Target: median <= 3 Newton iterations per increment (exact tangent). "
+                   f"Measured: median {med:g} over all {len(all_its)} increments of "
+                   f"{len(ok)} demos; per demo " + ", ".join(
+                       f"{r['demo']} {r['median_its']:g}" for r in ok)
+                   + (" -- **met**." if med <= 3 else " -- **missed**."))
+        out.append("")
+    out.append(f"Chart: `benchmarks/figures/{figure.name}` (r/r0 per iteration of one increment "
+               "per demo: the one where the CalculiX tangent needs the most extra iterations).")
+    return "\n".join(out)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--demos", default=",".join(DEMOS))
+    ap.add_argument("--no-results", action="store_true")
+    args = ap.parse_args(argv)
+    machine = B.machine()
+    rows, missing = [], []
+    for name in args.demos.split(","):
+        if demo_scene(name) is None:
+            missing.append(name)
+            print(f"{name}: no demo, skipped")
+            continue
+        for tangent in TANGENTS:
+            r = run_demo(name, tangent, args.quick)
+            rows.append(r)
+            if r["ok"]:
+                print(f"{name:16s} {tangent:10s} dofs={r['dofs']:7d} incs={r['increments']:3d} "
+                      f"its/inc median={r['median_its']:g} mean={r['mean_its']:.2f} "
+                      f"max={r['max_its']} q_med={r['median_q']:.2f} cutbacks={r['cutbacks']} "
+                      f"cpu={r['cpu']:.1f}s wall={r['wall']:.1f}s its={r['iterations']}",
+                      flush=True)
+            else:
+                print(f"{name:16s} {tangent:10s} FAILED: {r['error']}", flush=True)
+    figure = chart(rows, machine)
+    print(f"chart: {figure}")
+    text = report(rows, machine, B.load_average(), args.quick, figure, missing)
+    print(text)
+    if not args.no_results:
+        B.write_section("Newton convergence: exact vs CalculiX tangent", text)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

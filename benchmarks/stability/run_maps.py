@@ -1,0 +1,566 @@
+"""Stability maps of the contact solver: where each method converges, needs cutbacks or fails.
+
+    python benchmarks/stability/run_maps.py --quick      # < 5 min on 2 cores: the core maps
+    python benchmarks/stability/run_maps.py              # every sweep and method (~1 h)
+
+Options: ``--workers N`` (2), ``--only NAME`` (repeatable: a sweep's name, see
+``SWEEPS``), ``--rerun`` (ignore cached cases), ``--plot-only`` (redraw from the cached
+data).  Each sweep runs many tiny scenes (``_scenes.py``) in a ``multiprocessing`` pool
+of at most ``--workers`` processes, one case per task, each with a time limit.
+
+Outputs: ``figures/map_<sweep>.png`` (2D maps: one panel per method, cells coloured by
+outcome and annotated with iterations), ``figures/sweep_<sweep>.png`` (1D sweeps:
+Newton iterations and accuracy against the parameter), ``RESULTS.md`` (tables, machine,
+date) and ``data/<sweep>.json`` (every case with its outcome, reused by ``--plot-only``
+and by later runs unless ``--rerun``).
+"""
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import multiprocessing as mp
+import os
+import platform
+import signal
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+HERE = Path(__file__).resolve().parent
+FIGURES = HERE / "figures"
+DATA = HERE / "data"
+RESULTS = HERE / "RESULTS.md"
+CASE_TIMEOUT = 300  # seconds per case (--quick: 60)
+
+# ------------------------------------------------------------------------------ methods
+#: solver variants compared in the maps
+METHODS = {
+    "exact": {},
+    "exact + LS": {"line_search": True},
+    "CalculiX tangent": {"tangent": "calculix"},
+    "CalculiX + LS": {"tangent": "calculix", "line_search": True},
+    "exact, freeze at 2": {"pairing": 2},
+    "exact, no freeze": {"pairing": "never"},
+}
+QUICK_METHODS = ["exact", "exact + LS"]
+
+K_VALUES = [1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3, 1e4]
+K_QUICK = [1e-2, 1.0, 10.0, 100.0, 1e4]
+
+
+@dataclass
+class Sweep:
+    """A 1D or 2D sweep of one scene family over case parameters, for several methods."""
+
+    name: str
+    family: str
+    title: str
+    x: tuple  # (key, values, label, log-scale?)
+    y: tuple | None = None  # same, for a 2D map
+    fixed: dict = field(default_factory=dict)
+    methods: list = field(default_factory=lambda: list(METHODS))
+    quick: dict | None = None  # overrides in --quick mode: x/y values, methods; None: skip
+    accuracy: str = "pen"  # what the cells/second panel show, see ACCURACY
+    note: str = ""
+
+    def axes(self, quick: bool):
+        x, y, methods = self.x, self.y, self.methods
+        if quick and self.quick:
+            q = self.quick
+            x = (x[0], q.get("x", x[1]), *x[2:])
+            if y is not None:
+                y = (y[0], q.get("y", y[1]), *y[2:])
+            methods = q.get("methods", methods)
+        return x, y, methods
+
+    def cases(self, quick: bool) -> list[dict]:
+        x, y, methods = self.axes(quick)
+        out = []
+        for m in methods:
+            for yv in (y[1] if y else [None]):
+                for xv in x[1]:
+                    c = dict(family=self.family, **self.fixed, **METHODS[m], method=m)
+                    c[x[0]] = xv
+                    if y:
+                        c[y[0]] = yv
+                    out.append(c)
+        return out
+
+
+def _rel(a, b):
+    return abs(a / b - 1.0) if (a is not None and b) else None
+
+
+#: accuracy measures: (label, function(case result) -> value or None, text format)
+ACCURACY = {
+    "pen": ("largest overclosure / slave spacing", lambda r: r.get("penetration"),
+            lambda v: f"{100 * v:.2g}%"),
+    "ratio": ("|Ft/Fn - mu| / mu (full slip)", lambda r: _rel(r.get("ratio"), r.get("mu", 0.3))
+              if r.get("mu", 0.3) > 0 else None, lambda v: f"{100 * v:.2g}%"),
+    "hertz": ("|p_max / p0(Hertz) - 1|", lambda r: _rel(r.get("p_max"), r.get("p0_hertz")),
+              lambda v: f"{100 * v:.2g}%"),
+    "Fn_osc": ("range of Fn / mean Fn (2nd half of the drag)", lambda r: r.get("Fn_osc"),
+               lambda v: f"{100 * v:.2g}%"),
+    "Fn": ("|Fn / Fn(reference) - 1|", lambda r: r.get("Fn_err"), lambda v: f"{100 * v:.2g}%"),
+}
+
+SLIDES = [0.125, 0.25, 0.5, 1.0, 2.0, 4.0]
+SWEEPS = [
+    Sweep("block_K_increment", "block",
+          "sliding block (2D): penalty K x slide per increment",
+          x=("k", K_VALUES, "K / (E/h)", True),
+          y=("slide_faces", SLIDES, "slide per increment / master face", True),
+          quick=dict(x=K_QUICK, y=[0.25, 0.5, 1.0], methods=QUICK_METHODS)),
+    Sweep("hertz_K_increment", "hertz",
+          "Hertz cylinder (demo, coarse): penalty K x increments of the press",
+          x=("k", K_VALUES, "K / (E/h)", True),
+          y=("increments", [1, 2, 4, 8], "increments (press 0.25)", True),
+          accuracy="hertz",
+          quick=dict(x=K_QUICK, y=[1, 4], methods=["exact"])),
+    Sweep("ironing_K_increment", "ironing",
+          "ironing (demo, coarse: rigid die on a soft block): K x drag per increment",
+          x=("k", K_VALUES, "K / (E/h)", True),
+          y=("slide_faces", [0.25, 0.5, 1.0, 2.0], "drag per increment / slave spacing", True),
+          accuracy="Fn_osc",
+          quick=dict(x=K_QUICK, y=[0.5, 1.0], methods=QUICK_METHODS)),
+    Sweep("block3d_K_increment", "block3d",
+          "sliding block (3D demo, coarse): penalty K x slide increments",
+          x=("k", [1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3], "K / (E/h)", True),
+          y=("increments", [5, 10, 20], "increments (slide 10 = 1.5 block faces)", True),
+          methods=["exact", "exact + LS", "CalculiX tangent"]),
+    Sweep("block_stick_mu", "block", "sliding block (2D): stick slope x friction coefficient",
+          x=("lam", [1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0], "stick slope / (E/h)", True),
+          y=("mu", [0.0, 0.1, 0.3, 0.6, 1.0], "mu", False),
+          fixed=dict(slide_faces=0.25), accuracy="ratio",
+          quick=dict(x=[1e-3, 1e-1, 10.0], y=[0.0, 0.3, 1.0], methods=["exact"])),
+    Sweep("ironing_stick_mu", "ironing", "ironing (demo): stick slope x friction coefficient",
+          x=("lam", [1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0], "stick slope / (E/h)", True),
+          y=("mu", [0.0, 0.1, 0.3, 0.6, 1.0], "mu", False),
+          fixed=dict(slide_faces=0.5), accuracy="Fn_osc",
+          methods=["exact", "exact + LS", "exact, freeze at 2"]),
+    Sweep("block_pairing", "block",
+          "sliding block (2D): pairing iterations x slide per increment",
+          x=("pairing", [1, 2, 4, 8, "never"], "pairing iterations (then frozen)", False),
+          y=("slide_faces", [0.25, 0.5, 1.0, 2.0], "slide per increment / master face", True),
+          methods=["exact", "exact + LS"], accuracy="ratio",
+          quick=dict(y=[0.25, 1.0], methods=["exact"])),
+    Sweep("ironing_pairing", "ironing",
+          "ironing (demo): pairing iterations x drag per increment",
+          x=("pairing", [1, 2, 4, 8, "never"], "pairing iterations (then frozen)", False),
+          y=("slide_faces", [0.25, 0.5, 1.0, 2.0], "drag per increment / slave spacing", True),
+          methods=["exact", "exact + LS"], accuracy="Fn_osc",
+          quick=dict(y=[0.5], methods=["exact"])),
+    Sweep("block_ratio", "block", "sliding block (2D): slave / master mesh size",
+          x=("ratio", [0.25, 0.5, 1.0, 2.0, 4.0], "h_slave / h_master", True),
+          fixed=dict(slide_faces=0.25), accuracy="ratio",
+          quick=dict(methods=["exact"])),
+    Sweep("hertz_ratio", "hertz", "Hertz cylinder (demo): slave / master mesh size",
+          x=("ratio", [0.25, 0.5, 1.0, 2.0, 4.0], "h_slave / h_master", True),
+          accuracy="hertz", methods=["exact", "exact + LS", "CalculiX tangent"]),
+    Sweep("block_overhang", "block", "sliding block (2D): sliding off the end of the master",
+          x=("overhang", [-0.25, 0.0, 0.125, 0.25, 0.5, 0.75],
+             "block past the end of the master / block width", False),
+          fixed=dict(slide_faces=0.25), accuracy="ratio",
+          quick=dict(methods=["exact"])),
+    Sweep("block_gap", "block", "sliding block (2D): initial gap (+) or penetration (-)",
+          x=("gap", [-1.0, -0.5, -0.1, 0.0, 0.1, 0.5, 1.0], "initial gap / slave spacing", False),
+          fixed=dict(slide_faces=0.25), accuracy="Fn",
+          quick=dict(methods=["exact"])),
+    Sweep("block_mu", "block", "sliding block (2D): friction coefficient",
+          x=("mu", [0.0, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0], "mu", False),
+          fixed=dict(slide_faces=0.25), accuracy="ratio"),
+    Sweep("ironing_mu", "ironing", "ironing (demo): friction coefficient",
+          x=("mu", [0.0, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0], "mu", False),
+          fixed=dict(slide_faces=0.5), accuracy="Fn_osc"),
+]
+
+
+# ------------------------------------------------------------------------------ running
+class _Timeout(Exception):
+    pass
+
+
+def _alarm(signum, frame):
+    raise _Timeout(f"case exceeded {CASE_TIMEOUT} s")
+
+
+def _init_worker(timeout: int):
+    global CASE_TIMEOUT
+    CASE_TIMEOUT = timeout
+    sys.path.insert(0, str(HERE))
+    signal.signal(signal.SIGALRM, _alarm)
+    import _scenes  # noqa: F401  (dolfinx loads once per worker)
+
+
+def _work(case: dict) -> dict:
+    import _scenes
+    signal.alarm(CASE_TIMEOUT)
+    try:
+        out = _scenes.run_case({k: v for k, v in case.items() if k != "method"})
+    finally:
+        signal.alarm(0)
+    out["method"] = case.get("method")
+    if out.get("status") == "error" and "_Timeout" in out.get("message", ""):
+        out["status"] = "timeout"
+    return out
+
+
+def _key(case: dict) -> str:
+    return json.dumps(case, sort_keys=True)
+
+
+def run_sweeps(sweeps: list[Sweep], quick: bool, workers: int, rerun: bool) -> dict:
+    """Run every case not cached yet; returns {sweep name: [results]}."""
+    DATA.mkdir(exist_ok=True)
+    todo, cached = [], {}
+    for s in sweeps:
+        path = DATA / f"{s.name}.json"
+        old = {} if rerun or not path.exists() else {
+            _key(r["case"]): r for r in json.loads(path.read_text())}
+        cached[s.name] = old
+        todo += [(s.name, c) for c in s.cases(quick) if _key(c) not in old]
+    print(f"{len(todo)} cases to run on {workers} worker(s)", flush=True)
+    t0 = time.perf_counter()
+    new: dict[str, list] = {s.name: [] for s in sweeps}
+    if todo:
+        ctx = mp.get_context("spawn")  # no MPI/PETSc state inherited by fork
+        with ctx.Pool(workers, initializer=_init_worker,
+                      initargs=(60 if quick else CASE_TIMEOUT,)) as pool:
+            it = pool.imap(_work, [c for _, c in todo], chunksize=1)
+            for n, ((name, case), res) in enumerate(zip(todo, it), 1):
+                res = {k: v for k, v in res.items() if k != "traceback" or res["status"] == "error"}
+                new[name].append({"case": case, "result": res})
+                print(f"[{n}/{len(todo)} {time.perf_counter() - t0:5.0f} s] {name} "
+                      f"{ {k: v for k, v in case.items() if k != 'family'} } -> {res['status']}"
+                      f"{' LOST' if res.get('lost') else ''} ({res['wall']:.1f} s)", flush=True)
+    out = {}
+    for s in sweeps:
+        merged = dict(cached[s.name])
+        merged.update({_key(r["case"]): r for r in new[s.name]})
+        (DATA / f"{s.name}.json").write_text(json.dumps(list(merged.values()), indent=0,
+                                                        default=float))
+        wanted = {_key(c) for c in s.cases(quick)}
+        out[s.name] = [r for k, r in merged.items() if k in wanted]
+    return out
+
+
+# ----------------------------------------------------------------------------- outcomes
+OUTCOMES = {  # display order, colour, legend
+    "ok": ("#4daf4a", "converged"),
+    "cutback": ("#ffd92f", "converged after cutbacks"),
+    "lost": ("#984ea3", "accepted with the contact lost (wrong)"),
+    "failed": ("#e41a1c", "failed (after all cutbacks)"),
+    "timeout": ("#999999", "time limit"),
+    "error": ("#000000", "error (exception)"),
+}
+
+
+def outcome(r: dict) -> str:
+    s = r["status"]
+    if s in ("ok", "cutback") and r.get("lost"):
+        return "lost"
+    return s
+
+
+def cell_text(r: dict, accuracy: str) -> str:
+    o = outcome(r)
+    if o in ("failed", "timeout", "error"):
+        t = r.get("t_reached")
+        return "x" if t is None else f"x\nt={t:.2g}"
+    txt = f"{r['mean_iterations']:.1f}"
+    if r.get("cutbacks"):
+        txt += f" c{r['cutbacks']}"
+    if o == "lost":
+        return txt + "\nlost"
+    _, f, fmt = ACCURACY[accuracy]
+    v = f(r)
+    if v is not None:
+        txt += "\n" + fmt(v)
+    if r.get("warned"):
+        txt += "*"
+    return txt
+
+
+def _fmt_value(v) -> str:
+    if isinstance(v, float):
+        return f"{v:g}"
+    return str(v)
+
+
+# ----------------------------------------------------------------------------- charts
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def _legend_handles():
+    from matplotlib.patches import Patch
+    return [Patch(color=c, label=l) for c, l in OUTCOMES.values()]
+
+
+def _reference(sweep: Sweep, results: list[dict]) -> None:
+    """Fill ``Fn_err`` (gap sweep): the normal force against the zero-gap run of the same
+    method (the final indentation is the same for every initial gap)."""
+    if sweep.accuracy != "Fn":
+        return
+    ref = {}
+    for r in results:
+        c, res = r["case"], r["result"]
+        if c.get(sweep.x[0]) == 0.0 and res.get("Fn"):
+            ref[c["method"]] = res["Fn"]
+    for r in results:
+        res = r["result"]
+        base = ref.get(r["case"]["method"])
+        res["Fn_err"] = abs(res["Fn"] / base - 1.0) if base and res.get("Fn") else None
+
+
+def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
+    import numpy as np
+    from matplotlib.colors import ListedColormap
+    plt = _plt()
+    x, y, methods = sweep.axes(quick)
+    methods = [m for m in methods if any(r["case"]["method"] == m for r in results)]
+    ncol = min(3, len(methods))
+    nrow = math.ceil(len(methods) / ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.4 * nrow + 0.9), squeeze=False,
+                             dpi=110)
+    order = list(OUTCOMES)
+    cmap = ListedColormap([OUTCOMES[o][0] for o in order])
+    index = {(r["case"]["method"], _key(r["case"][x[0]]), _key(r["case"][y[0]])): r["result"]
+             for r in results}
+    for ax, m in zip(axes.ravel(), methods):
+        grid = np.full((len(y[1]), len(x[1])), np.nan)
+        for j, yv in enumerate(y[1]):
+            for i, xv in enumerate(x[1]):
+                r = index.get((m, _key(xv), _key(yv)))
+                if r is None:
+                    continue
+                o = outcome(r)
+                grid[j, i] = order.index(o)
+                ax.text(i, j, cell_text(r, sweep.accuracy), ha="center", va="center",
+                        fontsize=6.5, color="white" if o in ("lost", "failed", "error") else "black")
+        ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(order) - 0.5, origin="lower",
+                  aspect="auto")
+        ax.set_xticks(range(len(x[1])), [_fmt_value(v) for v in x[1]], fontsize=7)
+        ax.set_yticks(range(len(y[1])), [_fmt_value(v) for v in y[1]], fontsize=7)
+        ax.set_xlabel(x[2], fontsize=8)
+        ax.set_ylabel(y[2], fontsize=8)
+        ax.set_title(m, fontsize=9)
+    for ax in axes.ravel()[len(methods):]:
+        ax.axis("off")
+    label = ACCURACY[sweep.accuracy][0]
+    fig.suptitle(f"{sweep.title}\ncell: mean Newton iterations per increment, cN = cutbacks; "
+                 f"2nd line: {label}; * = penetration warning; x: failed at t", fontsize=9)
+    fig.legend(handles=_legend_handles(), loc="lower center", ncol=len(OUTCOMES), fontsize=7,
+               frameon=False)
+    fig.tight_layout(rect=(0, 0.05, 1, 0.93))
+    FIGURES.mkdir(exist_ok=True)
+    path = FIGURES / f"map_{sweep.name}.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+MARKERS = {"ok": "o", "cutback": "s", "lost": "D", "failed": "X", "timeout": "X", "error": "X"}
+
+
+def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
+    plt = _plt()
+    x, _, methods = sweep.axes(quick)
+    methods = [m for m in methods if any(r["case"]["method"] == m for r in results)]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.8), dpi=110)
+    numeric = all(isinstance(v, (int, float)) for v in x[1])
+    pos = {(_key(v)): (v if numeric else i) for i, v in enumerate(x[1])}
+    _, f, _ = ACCURACY[sweep.accuracy]
+    for k, m in enumerate(methods):
+        rs = sorted((r for r in results if r["case"]["method"] == m),
+                    key=lambda r: x[1].index(r["case"][x[0]]))
+        xs = [pos[_key(r["case"][x[0]])] for r in rs]
+        its = [r["result"].get("newton", 0) or 0 for r in rs]
+        line, = a1.plot(xs, its, "-", lw=1, alpha=0.6, label=m)
+        for xv, it, r in zip(xs, its, rs):
+            o = outcome(r["result"])
+            a1.plot(xv, max(it, 1), MARKERS[o], color=OUTCOMES[o][0], mec=line.get_color(),
+                    ms=7, mew=1.2)
+            v = f(r["result"]) if o in ("ok", "cutback") else None
+            if v is not None:
+                a2.plot(xv, max(v, 1e-12), MARKERS[o], color=line.get_color(), ms=6)
+        acc = [(xv, f(r["result"])) for xv, r in zip(xs, rs)
+               if outcome(r["result"]) in ("ok", "cutback") and f(r["result"]) is not None]
+        if acc:
+            a2.plot([a for a, _ in acc], [max(b, 1e-12) for _, b in acc], "-",
+                    color=line.get_color(), lw=1, alpha=0.6)
+    for a in (a1, a2):
+        if numeric and x[3]:
+            a.set_xscale("log")
+        if not numeric:
+            a.set_xticks(range(len(x[1])), [_fmt_value(v) for v in x[1]])
+        a.set_xlabel(x[2])
+        a.grid(alpha=0.3)
+    a1.set_yscale("log")
+    a1.set_ylabel("Newton iterations, whole run (incl. cutbacks)")
+    a1.legend(fontsize=7)
+    a2.set_yscale("log")
+    a2.set_ylabel(ACCURACY[sweep.accuracy][0], fontsize=8)
+    a2.set_title("accuracy where converged", fontsize=9)
+    fig.suptitle(sweep.title, fontsize=10)
+    fig.legend(handles=_legend_handles(), loc="lower center", ncol=len(OUTCOMES), fontsize=7,
+               frameon=False)
+    fig.tight_layout(rect=(0, 0.07, 1, 0.95))
+    FIGURES.mkdir(exist_ok=True)
+    path = FIGURES / f"sweep_{sweep.name}.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+# ----------------------------------------------------------------------------- RESULTS.md
+def _machine() -> dict:
+    cpu = "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return dict(nproc=os.cpu_count(), cpu=cpu, python=platform.python_version(),
+                date=datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
+                load=round(os.getloadavg()[0], 1))
+
+
+def table(sweep: Sweep, results: list[dict], quick: bool) -> str:
+    x, y, methods = sweep.axes(quick)
+    methods = [m for m in methods if any(r["case"]["method"] == m for r in results)]
+    index = {(r["case"]["method"], _key(r["case"][x[0]]),
+              _key(r["case"][y[0]]) if y else None): r["result"] for r in results}
+
+    def cell(r):
+        if r is None:
+            return ""
+        o = outcome(r)
+        if o in ("failed", "timeout", "error"):
+            t = r.get("t_reached")
+            return f"**{o.upper()}**" + (f" (t={t:.3g})" if t is not None else "")
+        txt = cell_text(r, sweep.accuracy).replace("\n", " ")
+        return ("LOST " if o == "lost" else "") + txt
+
+    lines = []
+    if y is None:
+        lines.append(f"| {x[2]} | " + " | ".join(methods) + " |")
+        lines.append("|---:|" + "---|" * len(methods))
+        for xv in x[1]:
+            lines.append(f"| {_fmt_value(xv)} | " + " | ".join(
+                cell(index.get((m, _key(xv), None))) for m in methods) + " |")
+    else:
+        for m in methods:
+            lines.append(f"\n*{m}* (rows: {y[2]}; columns: {x[2]})\n")
+            lines.append(f"| | " + " | ".join(_fmt_value(v) for v in x[1]) + " |")
+            lines.append("|---:|" + "---|" * len(x[1]))
+            for yv in y[1]:
+                lines.append(f"| {_fmt_value(yv)} | " + " | ".join(
+                    cell(index.get((m, _key(xv), _key(yv)))) for xv in x[1]) + " |")
+    return "\n".join(lines)
+
+
+def counts(results: list[dict]) -> str:
+    c: dict = {}
+    for r in results:
+        o = outcome(r["result"])
+        c[o] = c.get(o, 0) + 1
+    return ", ".join(f"{n} {o}" for o, n in sorted(c.items(), key=lambda t: list(OUTCOMES).index(t[0])))
+
+
+def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figures) -> None:
+    mode = "--quick" if quick else "full"
+    parts = [
+        "# Stability maps: results",
+        "",
+        f"Generated by `python benchmarks/stability/run_maps.py{' --quick' if quick else ''}` "
+        f"({mode} mode) on {machine['date']}; {wall:.0f} s wall with {machine['workers']} "
+        f"worker process(es).",
+        "",
+        f"* machine: {machine['nproc']} cores (nproc), CPU `{machine['cpu']}`, Python "
+        f"{machine['python']}; 1-min load average {machine['load']} at the start (the machine "
+        f"is shared with other jobs, so wall times are indicative only)",
+        "* what the findings mean, and where each method stops working: `README.md`",
+        "",
+        "Cell legend: `4.2 c3` = converged with 4.2 Newton iterations per converged increment on "
+        "average and 3 cutbacks in the whole run; the second number is the accuracy measure "
+        "named above each table; `*` = the run printed the penetration warning (overclosure "
+        "> 5 % of the slave spacing); **FAILED (t=...)** = an increment failed after all "
+        "cutbacks (5, halving), `t` = the load-step time reached; LOST = the solver accepted "
+        "an increment in which the contact carrying the load had vanished (no slave node "
+        "in contact, or the normal force below 10 % of its value after the press): the run "
+        "reports converged but the answer is wrong.",
+        "",
+        "Case defaults (see `_scenes.py`): Newton tolerance 1e-9 relative, at most 30 "
+        "iterations, at most 5 cutbacks; K and the stick slope are given as multiples of "
+        "E_slave / h_slave (the package default K = 50 E is 6.25 E/h for the 2D block, "
+        "h = 1/8; 10 E/h for the Hertz mesh, h = 0.2; 25 E/h for the ironing block, h = 0.5); "
+        "default stick slope E/2; mu = 0.3 (Hertz: 0).",
+        "",
+    ]
+    for s in sweeps:
+        rs = results.get(s.name)
+        if not rs:
+            continue
+        fig = figures.get(s.name)
+        parts += [f"## {s.title}", "",
+                  f"`{s.name}`: {len(rs)} runs ({counts(rs)}). Accuracy: "
+                  f"{ACCURACY[s.accuracy][0]}. Figure: `figures/{fig.name}`" if fig else "", ""]
+        if s.note:
+            parts += [s.note, ""]
+        parts += [table(s, rs, quick), ""]
+    RESULTS.write_text("\n".join(parts) + "\n")
+
+
+# ----------------------------------------------------------------------------- main
+def main(argv=None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="the core maps only (< 5 min)")
+    p.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
+    p.add_argument("--only", action="append", default=[], help="run only this sweep")
+    p.add_argument("--rerun", action="store_true", help="ignore cached results")
+    p.add_argument("--plot-only", action="store_true", help="redraw from data/*.json")
+    args = p.parse_args(argv)
+    sweeps = [s for s in SWEEPS if (not args.only or s.name in args.only)
+              and (not args.quick or s.quick is not None)]
+    machine = _machine()
+    machine["workers"] = args.workers
+    t0 = time.perf_counter()
+    if args.plot_only:
+        results = {}
+        for s in sweeps:
+            path = DATA / f"{s.name}.json"
+            if path.exists():
+                wanted = {_key(c) for c in s.cases(args.quick)}
+                results[s.name] = [r for r in json.loads(path.read_text())
+                                   if _key(r["case"]) in wanted]
+    else:
+        results = run_sweeps(sweeps, args.quick, max(1, min(args.workers, 2)), args.rerun)
+    wall = time.perf_counter() - t0
+    figures = {}
+    for s in sweeps:
+        rs = [dict(case=r["case"], result=dict(r["result"])) for r in results.get(s.name, [])]
+        if not rs:
+            continue
+        _reference(s, rs)
+        results[s.name] = rs
+        figures[s.name] = plot_map(s, rs, args.quick) if s.y else plot_sweep(s, rs, args.quick)
+        print(f"figure: {figures[s.name].relative_to(HERE.parent.parent)}  ({counts(rs)})")
+    if not args.only and not args.plot_only:
+        write_results(sweeps, results, args.quick, machine, wall, figures)
+        print(f"written: {RESULTS.relative_to(HERE.parent.parent)} ({wall:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()

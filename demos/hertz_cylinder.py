@@ -1,0 +1,179 @@
+"""Hertz line contact: an elastic cylinder pressed onto an elastic block (2D plane strain).
+
+Quarter model with symmetry about ``x = 0``: a quarter disk (radius R = 10,
+centre (0, R)) on a half block (30 x 20).  Both bodies have E = 1000,
+nu = 0.3; the meshes (quadrilaterals) are refined around the first point of
+contact, the cylinder (slave) about twice as finely as the block (master).
+The flat top of the quarter disk is pushed down by 0.25 in 4 increments,
+frictionless.
+
+Reference (Johnson §4.3, :func:`dolfinx_friction.analytic.hertz_line`): with
+the load per unit length of the whole cylinder ``P = 2 |R_top_y|``,
+``a = sqrt(4 P R / (pi E*))`` and ``p0 = 2 P / (pi a)``, ``1/E* = 2 (1-nu^2)/E``.
+The script fits the elliptic profile ``p^2 = p0^2 (1 - x^2/a^2)`` to the nodal
+pressures and also reports the largest nodal pressure; a picture of the
+profile against Hertz is written next to the results.
+
+    python demos/hertz_cylinder.py
+    python -m dolfinx_friction run demos/hertz_cylinder.toml [--set body.0.degree=2 --set body.1.degree=2]
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import _common as C  # noqa: F401  (pyvista before dolfinx)
+import numpy as np
+
+from dolfinx_friction.analytic import effective_modulus, hertz_line, hertz_line_pressure
+
+SCENE = C.HERE / "hertz_cylinder.toml"
+MESH = C.HERE / "hertz_cylinder.msh"
+R, E, NU = 10.0, 1000.0, 0.3
+BLOCK = (30.0, 20.0)  # half width, depth
+
+
+def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
+               master_ratio: float = 2.0, refine_radius: float = 2.5) -> None:
+    """Quarter disk over a half block, quadrilaterals refined near the origin.
+
+    ``h_contact``: cylinder element size within ``refine_radius`` of the first
+    contact point (the block's is ``master_ratio`` times larger); ``h_far``:
+    size far away.
+    """
+    import gmsh
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("hertz_cylinder")
+        geo = gmsh.model.geo
+        W, D = BLOCK
+        # cylinder: quarter disk x >= 0, centre (0, R)
+        c = geo.addPoint(0, R, 0)
+        p0, p1 = geo.addPoint(0, 0, 0), geo.addPoint(R, R, 0)
+        arc = geo.addCircleArc(p0, c, p1)
+        top = geo.addLine(p1, c)
+        sym = geo.addLine(c, p0)
+        cyl = geo.addPlaneSurface([geo.addCurveLoop([arc, top, sym])])
+        # block: [0, W] x [-D, 0] (its own points: no node is shared with the cylinder)
+        q = [geo.addPoint(0, 0, 0), geo.addPoint(0, -D, 0), geo.addPoint(W, -D, 0),
+             geo.addPoint(W, 0, 0)]
+        b_sym, b_bottom, b_right, b_top = (geo.addLine(q[0], q[1]), geo.addLine(q[1], q[2]),
+                                           geo.addLine(q[2], q[3]), geo.addLine(q[3], q[0]))
+        block = geo.addPlaneSurface([geo.addCurveLoop([b_sym, b_bottom, b_right, b_top])])
+        geo.synchronize()
+
+        f = gmsh.model.mesh.field
+        fields = []
+        for point, h in ((p0, h_contact), (q[0], master_ratio * h_contact)):
+            dist = f.add("Distance")
+            f.setNumbers(dist, "PointsList", [point])
+            thr = f.add("Threshold")
+            f.setNumber(thr, "InField", dist)
+            f.setNumber(thr, "SizeMin", h)
+            f.setNumber(thr, "SizeMax", h_far)
+            f.setNumber(thr, "DistMin", refine_radius)
+            f.setNumber(thr, "DistMax", refine_radius + 12.0)
+            restrict = f.add("Restrict")
+            f.setNumber(restrict, "InField", thr)
+            f.setNumbers(restrict, "SurfacesList", [cyl if point == p0 else block])
+            f.setNumbers(restrict, "CurvesList", [arc, top, sym] if point == p0
+                         else [b_sym, b_bottom, b_right, b_top])
+            fields.append(restrict)
+        fmin = f.add("Min")
+        f.setNumbers(fmin, "FieldsList", fields)
+        f.setAsBackgroundMesh(fmin)
+        for key, value in (("Mesh.MeshSizeExtendFromBoundary", 0),
+                           ("Mesh.MeshSizeFromPoints", 0), ("Mesh.MeshSizeFromCurvature", 0),
+                           ("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
+                           ("Mesh.RecombinationAlgorithm", 1)):
+            gmsh.option.setNumber(key, value)
+
+        def group(dim, tags, name):
+            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
+
+        group(2, [cyl], "cylinder")
+        group(2, [block], "block")
+        group(1, [arc], "cylinder_surface")
+        group(1, [top], "cylinder_top")
+        group(1, [sym], "cylinder_symmetry")
+        group(1, [b_top], "block_top")
+        group(1, [b_bottom], "block_bottom")
+        group(1, [b_sym], "block_symmetry")
+        gmsh.model.mesh.generate(2)
+        types = gmsh.model.mesh.getElementTypes(2)
+        if len(types) != 1:  # dolfinx 0.5 meshes hold one cell type
+            raise RuntimeError(f"mixed 2D element types {types}: refine differently")
+        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+
+
+def fit_elliptic(x: np.ndarray, p: np.ndarray) -> tuple[float, float]:
+    """(a, p0) of ``p^2 = p0^2 (1 - x^2/a^2)`` by least squares on the nodes with p > 0.2 max."""
+    keep = p > 0.2 * p.max()
+    A = np.column_stack([np.ones(keep.sum()), x[keep] ** 2])
+    c0, c1 = np.linalg.lstsq(A, p[keep] ** 2, rcond=None)[0]
+    return float(np.sqrt(-c0 / c1)), float(np.sqrt(c0))
+
+
+def profile_plot(path: Path, x, p, P, E_star, a_fit, title: str) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    a, p0 = hertz_line(P, R, E_star)
+    xs = np.linspace(0, 1.6 * a, 400)
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
+    ax.plot(xs, hertz_line_pressure(xs, P, R, E_star), "k-", label=f"Hertz: a = {a:.4f}, p0 = {p0:.3f}")
+    ax.plot(x, p, "o", ms=4, color="#d62728", label="nodal F_N / A_p")
+    ax.axvline(a_fit, color="#1f77b4", ls=":", label=f"fitted a = {a_fit:.4f}")
+    ax.set_xlabel("x (distance from the symmetry plane)")
+    ax.set_ylabel("contact pressure")
+    ax.set_xlim(0, 1.6 * a)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def main(argv=None) -> None:
+    args = C.parse_args(__doc__.splitlines()[0], argv)
+    scene = Path(args.scene) if args.scene else SCENE
+    C.ensure_mesh(MESH, build_mesh, args.rebuild)
+    result, seconds = C.run_scene(scene, args)
+    C.report(result, seconds)
+    if not args.no_render:
+        C.render(result, "hertz_cylinder", warp=1.0, title="Hertz line contact (quarter model)")
+    st = C.contact_state(result)
+    if C.MPI.COMM_WORLD.rank != 0:
+        return
+    P = 2.0 * abs(result.increments[-1].reactions["cylinder_top"][1])
+    E_star = effective_modulus(E, NU, E, NU)
+    a, p0 = hertz_line(P, R, E_star)
+    closed = st["status"] != 0
+    x, p = st["X"][closed, 0], st["pressure"][closed]
+    order = np.argsort(x)
+    x, p = x[order], p[order]
+    a_fit, p0_fit = fit_elliptic(x, p)
+    x_all = st["X_all"][:, 0]
+    x_first_open = x_all[x_all > x.max()].min() if np.any(x_all > x.max()) else np.nan
+    print(f"load per unit length P = {P:.4f} (2 x cylinder_top reaction), E* = {E_star:.3f}, "
+          f"2 sum F_N / P = {2 * st['F_N'][closed].sum() / P:.8f}")
+    print(f"Hertz:   a = {a:.4f}   p0 = {p0:.4f}")
+    print(f"nodal:   p_max = {p.max():.4f} ({C.relerr(p.max(), p0)})   last closed node at "
+          f"x = {x.max():.4f}, first open at {x_first_open:.4f} (a = {a:.4f})")
+    print(f"fitted:  a = {a_fit:.4f} ({C.relerr(a_fit, a)})   p0 = {p0_fit:.4f} "
+          f"({C.relerr(p0_fit, p0)})   [p^2 = p0^2 (1 - x^2/a^2) on {int((p > 0.2 * p.max()).sum())} nodes]")
+    inside = x < 0.9 * a
+    err = np.abs(p[inside] - hertz_line_pressure(x[inside], P, R, E_star)).max() / p0
+    print(f"max |p - p_Hertz| / p0 over |x| < 0.9 a: {100 * err:.2f} %")
+    if not args.no_render:
+        path = Path(result.directory) / "hertz_cylinder_profile.png"
+        profile_plot(path, x, p, P, E_star, a_fit, "Hertz line contact: cylinder on a block")
+        print(f"picture: {path}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,220 @@
+"""Boundaries found by the stability maps (``benchmarks/stability/``).
+
+* A slide increment that Newton cannot take in one go (the stick -> slip transition of
+  an elastic block on an elastic foundation) converges once the increment is cut back,
+  with the history rolled back, and gives the full-slip answer.
+* Chattering: a convex slave tip pressed into a concave V-groove flips between the two
+  groove faces at every re-pairing; freezing the pairing early converges in a few
+  iterations, the CalculiX default (freeze after 8) needs twice as many, and re-pairing
+  in every iteration never converges, whatever the increment.
+* A penalty far too soft (K = 0.01 E/h) is flagged by the penetration warning; the
+  default is not.
+* A penalty far too stiff (K = 10^4 E/h) turns a slide increment that converges at
+  K = 10 E/h into a failure: cutbacks rescue it, and with too few cutbacks the failure
+  is reported (ConvergenceError naming the increment, ``summary.json`` not converged)
+  and the failed increment is never written as converged.
+
+All scenes are small 2D meshes; every test runs serially and under ``mpirun -n 2``.
+"""
+from __future__ import annotations
+
+import json
+
+import gmsh
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from dolfinx_friction.api import PENETRATION_WARNING, run
+from dolfinx_friction.model import BC, Body, ContactPair, Output, Rigid, Scene, Step
+from dolfinx_friction.solver import ConvergenceError
+from tests import meshes
+
+E, NU = 1000.0, 0.3
+
+
+def _converged(inc, step: Step) -> bool:
+    """The increment's last residual meets the step's Newton tolerance."""
+    return inc.residuals[-1] <= max(step.newton_rtol * inc.residuals[0], step.newton_atol)
+
+
+# ----------------------------------------------------------------------------- meshes
+def _rectangle(x0, y0, w, h, nx, ny):
+    geo = gmsh.model.geo
+    p = [geo.addPoint(x0, y0, 0), geo.addPoint(x0 + w, y0, 0), geo.addPoint(x0 + w, y0 + h, 0),
+         geo.addPoint(x0, y0 + h, 0)]
+    lines = [geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
+    s = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+    for i, line in enumerate(lines):
+        geo.mesh.setTransfiniteCurve(line, (nx if i % 2 == 0 else ny) + 1)
+    geo.mesh.setTransfiniteSurface(s)
+    geo.mesh.setRecombine(2, s)
+    return s, lines
+
+
+def block_on_foundation(path):
+    """Block [0,1] x [0,0.5] (8 x 4 quads) on a foundation [-0.546, 1.5] x [-0.5, 0]
+    (master faces of the block's size, shifted by 0.37 of a face)."""
+    def build():
+        blk, bl = _rectangle(0.0, 0.0, 1.0, 0.5, 8, 4)
+        fnd, fl = _rectangle(-0.5 - 0.37 / 8, -0.5, 2.0 + 0.37 / 8, 0.5, 16, 4)
+        gmsh.model.geo.synchronize()
+        meshes._group(2, [blk], "block")
+        meshes._group(2, [fnd], "foundation")
+        meshes._group(1, [bl[0]], "block_bottom")
+        meshes._group(1, [bl[2]], "block_top")
+        meshes._group(1, [fl[2]], "foundation_top")
+        meshes._group(1, [fl[0]], "foundation_bottom")
+        gmsh.model.mesh.generate(2)
+    return meshes._write(build, path)
+
+
+def tip_in_groove(path):
+    """A block whose bottom is a convex V (slope 0.2, tip at (0.5, 0)) over a foundation
+    whose top is a concave V-groove (slope 0.1, bottom at (0.5, 0)): the tip node sits on
+    the edge between the two groove faces."""
+    def build():
+        geo, h = gmsh.model.geo, 0.0625
+        f = [geo.addPoint(0, -0.5, 0, h), geo.addPoint(1, -0.5, 0, h), geo.addPoint(1, 0.05, 0, h),
+             geo.addPoint(0.5, 0, 0, h), geo.addPoint(0, 0.05, 0, h)]
+        fl = [geo.addLine(f[i], f[(i + 1) % 5]) for i in range(5)]
+        fs = geo.addPlaneSurface([geo.addCurveLoop(fl)])
+        b = [geo.addPoint(0.25, 0.05, 0, h), geo.addPoint(0.5, 0, 0, h),
+             geo.addPoint(0.75, 0.05, 0, h), geo.addPoint(0.75, 0.3, 0, h),
+             geo.addPoint(0.25, 0.3, 0, h)]
+        bl = [geo.addLine(b[i], b[(i + 1) % 5]) for i in range(5)]
+        bs = geo.addPlaneSurface([geo.addCurveLoop(bl)])
+        for line in bl[:2]:
+            geo.mesh.setTransfiniteCurve(line, 5)
+        for line in fl[2:4]:
+            geo.mesh.setTransfiniteCurve(line, 9)
+        geo.synchronize()
+        meshes._group(2, [fs], "foundation")
+        meshes._group(2, [bs], "block")
+        meshes._group(1, fl[2:4], "groove")
+        meshes._group(1, [fl[0]], "foundation_bottom")
+        meshes._group(1, bl[:2], "tip")
+        meshes._group(1, [bl[3]], "block_top")
+        gmsh.model.mesh.generate(2)
+    return meshes._write(build, path)
+
+
+# ----------------------------------------------------------------------------- scenes
+def _sliding_block(mesh, slide: float, max_cutbacks: int) -> Scene:
+    """Press the block 0.01 into the foundation, then slide it by ``slide`` in one
+    increment; default penalty (K = 50 E = 6.25 E/h), mu = 0.3."""
+    kw = dict(max_cutbacks=max_cutbacks)
+    return Scene(
+        mesh=mesh, bodies=(Body("block", E, NU), Body("foundation", E, NU)),
+        contacts=(ContactPair("block_bottom", "foundation_top", mu=0.3),),
+        steps=(Step("press", bcs=(BC("foundation_bottom", (0.0, 0.0)),
+                                  BC("block_top", (0.0, -0.01))), **kw),
+               Step("slide", bcs=(BC("block_top", (slide, -0.01)),), **kw)))
+
+
+def _block_on_floor(mesh, k: float, max_cutbacks: int = 5, slide: float = 0.5,
+                    output: Output = Output()) -> Scene:
+    """The 8 x 2 rectangle pressed 0.005 onto a rigid floor, then slid by ``slide`` (4
+    slave spacings) in one increment; K = k E/h with h = 1/8, mu = 0.3."""
+    kw = dict(max_cutbacks=max_cutbacks)
+    return Scene(
+        mesh=mesh, bodies=(Body("block", E, NU),),
+        rigids=(Rigid("floor", "plane", point=(0.0, 0.0), normal=(0.0, 1.0)),),
+        contacts=(ContactPair("bottom", "floor", mu=0.3, K=k * E * 8),),
+        steps=(Step("press", bcs=(BC("top", (0.0, -0.005)),), **kw),
+               Step("slide", bcs=(BC("top", (slide, -0.005)),), **kw)),
+        output=output)
+
+
+# ------------------------------------------------------------------------------ tests
+def test_cutback_rescues_stick_slip_transition(shared_dir):
+    """Block on foundation, slide 0.05 (0.4 face) in one increment: Newton cycles without
+    converging (stick -> slip of all nodes at once); halving the increment converges and
+    the rolled-back history gives the answer of the smaller increments."""
+    mesh = block_on_foundation(shared_dir / "block.msh")
+    with pytest.raises(ConvergenceError, match=r"step 1 \('slide'\), increment 1 .* 0 cutbacks"):
+        run(_sliding_block(mesh, 0.05, max_cutbacks=0), write=False)
+    scene = _sliding_block(mesh, 0.05, max_cutbacks=5)
+    result = run(scene, write=False)
+    assert result.summary.converged and result.summary.cutbacks >= 1
+    incs = result.increments
+    assert incs[-1].t == pytest.approx(2.0)
+    assert all(_converged(inc, scene.steps[inc.step]) for inc in incs)
+    assert incs[-1].active == 9
+    R = incs[-1].reactions["block_top"]
+    assert abs(R[0] / R[1]) == pytest.approx(0.3, rel=0.02)  # (nearly) full slip
+    # the same smaller increments, asked for directly, give the same state
+    n = sum(1 for inc in incs if inc.step == 1)
+    direct = run(Scene(mesh=scene.mesh, bodies=scene.bodies, contacts=scene.contacts,
+                       steps=(scene.steps[0], Step("slide", increments=n,
+                                                   bcs=scene.steps[1].bcs))), write=False)
+    np.testing.assert_allclose(direct.increments[-1].reactions["block_top"], R, rtol=1e-8)
+
+
+def _groove_scene(mesh, pairing_iterations: int, max_cutbacks: int = 0) -> Scene:
+    return Scene(
+        mesh=mesh, bodies=(Body("block", E, NU), Body("foundation", E, NU)),
+        contacts=(ContactPair("tip", "groove", K=10.0 * E / 0.0625,
+                              pairing_iterations=pairing_iterations),),
+        steps=(Step("press", max_cutbacks=max_cutbacks,
+                    bcs=(BC("foundation_bottom", (0.0, 0.0)), BC("block_top", (0.0, -0.005)))),))
+
+
+def test_pairing_freeze_stops_face_chattering(shared_dir):
+    """The tip node in a concave V-groove is pushed by each groove face towards the other:
+    re-paired in every iteration it alternates between the two faces for ever; with the
+    pairing frozen it converges on one of them."""
+    mesh = tip_in_groove(shared_dir / "groove.msh")
+    frozen = run(_groove_scene(mesh, 2), write=False)
+    inc = frozen.increments[-1]
+    assert inc.active == 1 and inc.iterations <= 6
+    assert -inc.reactions["block_top"][1] > 1.0  # the tip carries the press
+    default = run(_groove_scene(mesh, 8), write=False)  # CalculiX: freeze after 8
+    assert default.increments[-1].iterations >= 9  # chattered until the freeze
+    with pytest.raises(ConvergenceError):
+        run(_groove_scene(mesh, 10 ** 6, max_cutbacks=2), write=False)
+
+
+def test_too_soft_penalty_warns(shared_dir, capsys):
+    """K = 0.01 E/h lets the block sink 8 % of its node spacing into the floor: warned,
+    also in summary.json; the default K (6.25 E/h) is not."""
+    mesh = meshes.rectangle_2d(shared_dir / "rect.msh", n=(8, 2))
+    comm = MPI.COMM_WORLD
+    out = shared_dir / "soft"
+    soft = run(_block_on_floor(mesh, 0.01, output=Output(fields=False)), out=out, quiet=True)
+    worst = max(inc.penetration["bottom->floor"] for inc in soft.increments)
+    assert worst > PENETRATION_WARNING
+    err = capsys.readouterr().err
+    if comm.rank == 0:
+        assert "too soft" in err and "bottom->floor" in err
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["converged"] and any("too soft" in w for w in summary["warnings"])
+    default = run(_block_on_floor(mesh, 6.25), write=False)
+    assert max(inc.penetration["bottom->floor"] for inc in default.increments) < PENETRATION_WARNING
+    assert "too soft" not in capsys.readouterr().err
+
+
+def test_too_stiff_penalty_cut_back_or_reported(shared_dir):
+    """Slide by 4 spacings in one increment: fine at K = 10 E/h; at K = 10^4 E/h Newton
+    fails, cutbacks recover it, and with one cutback only the run stops with a report and
+    writes only the converged increments."""
+    mesh = meshes.rectangle_2d(shared_dir / "rect.msh", n=(8, 2))
+    moderate = run(_block_on_floor(mesh, 10.0, max_cutbacks=0), write=False)
+    assert moderate.summary.cutbacks == 0
+    stiff_scene = _block_on_floor(mesh, 1e4, max_cutbacks=5)
+    stiff = run(stiff_scene, write=False)
+    assert stiff.summary.cutbacks >= 1
+    assert all(_converged(inc, stiff_scene.steps[inc.step]) for inc in stiff.increments)
+    last = stiff.increments[-1]
+    assert last.t == pytest.approx(2.0) and last.active == last.slipping == 9
+    R = last.reactions["top"]
+    assert abs(R[0] / R[1]) == pytest.approx(0.3, rel=1e-8)  # full slip, as with K = 10 E/h
+    out = shared_dir / "stiff"
+    with pytest.raises(ConvergenceError, match=r"step 1 \('slide'\), increment 1 .* 1 cutbacks"):
+        run(_block_on_floor(mesh, 1e4, max_cutbacks=1, output=Output(fields=False)), out=out,
+            quiet=True)
+    if MPI.COMM_WORLD.rank == 0:
+        rows = (out / "history.csv").read_text().splitlines()[1:]
+        assert [r.split(",")[:2] for r in rows] == [["0", "1"]]  # the press only
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["converged"] is False and "increment 1" in summary["failure"]
