@@ -33,7 +33,7 @@ __all__ = [
     "cattaneo_mindlin_stick_half_width", "cattaneo_mindlin_traction",
     "mindlin_sphere_stick_radius",
     "incline_push_ratio", "incline_hold_ratio",
-    "self_check",
+    "fit_elliptic", "self_check",
 ]
 
 
@@ -301,3 +301,13 @@ if __name__ == "__main__":
     failures, tests = doctest.testmod()
     print(f"doctest: {tests - failures}/{tests} passed")
     raise SystemExit(1 if failures else 0)
+
+
+def fit_elliptic(x: np.ndarray, p: np.ndarray, floor: float = 0.2) -> tuple[float, float]:
+    """``(a, p0)`` of the Hertz profile ``p^2 = p0^2 (1 - x^2/a^2)`` fitted by least squares
+    to nodal pressures ``p`` at distances ``x`` from the centre (nodes with p > floor max p)."""
+    x, p = np.asarray(x, float), np.asarray(p, float)
+    keep = p > floor * p.max()
+    A = np.column_stack([np.ones(keep.sum()), x[keep] ** 2])
+    c0, c1 = np.linalg.lstsq(A, p[keep] ** 2, rcond=None)[0]
+    return float(np.sqrt(-c0 / c1)), float(np.sqrt(c0))

@@ -197,9 +197,12 @@ class Solver:
         for index, step in enumerate(self.problem.scene.steps):
             loading = self._step_loading(index)
             tau, level, number = 0.0, 0, 0
+            rate = None  # du/dtau of the step's last increment: the next one's predictor
             while tau < 1.0 - 1e-12:
                 dtau = min(1.0 / (step.increments * 2 ** level), 1.0 - tau)
                 saved = self._save()
+                if rate is not None:
+                    self.problem.u.axpy(dtau, rate)
                 ok, iters, residuals = self._newton(step, loading, tau + dtau)
                 summary.newton_iterations += iters
                 if not ok:
@@ -217,6 +220,9 @@ class Solver:
                     continue
                 tau += dtau
                 number += 1
+                rate = rate or self.problem.u.duplicate()
+                rate.waxpy(-1.0, self.u_n, self.problem.u)
+                rate.scale(1.0 / dtau)
                 for inter in self.problem.interactions:
                     inter.commit()
                 summary.increments += 1
