@@ -1,0 +1,37 @@
+"""Contact results gathered for comparison with reference solutions."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def contact_state(result, pair: int = 0) -> dict[str, np.ndarray]:
+    """Reference coordinates, pressure, forces, gap and status of the slave nodes with an
+    element in contact pair ``pair`` (current increment), gathered on every rank.
+
+    ``X_all`` holds the reference coordinates of every slave node of the pair.
+    """
+    inter = result.problem.interactions[pair]
+    comm = result.problem.comm
+    el, r = inter.elements, inter.elements.result
+    area = inter.slaves.area[el.slave]
+    local = dict(X=inter.slaves.X[el.slave], pressure=r.F_N / area, F_N=r.F_N, F_T=r.F_T,
+                 area=area, status=r.status, g_N=r.g_N)
+    parts = comm.allgather(local)
+    out = {k: np.concatenate([p[k] for p in parts]) for k in local}
+    out["X_all"] = np.concatenate(comm.allgather(inter.slaves.X))
+    return out
+
+
+def stick_half_width(x: np.ndarray, status: np.ndarray) -> tuple[float, float, float]:
+    """Half-width, centre and node spacing of the stick zone along ``x``.
+
+    The zone's edges lie midway between the outermost sticking nodes and their slipping
+    neighbours; ``status`` uses the element codes (1 stick, 2 slip).
+    """
+    order = np.argsort(x)
+    x, status = x[order], status[order]
+    stick = np.flatnonzero(status == 1)
+    lo, hi = stick.min(), stick.max()
+    left = 0.5 * (x[lo] + x[lo - 1]) if lo > 0 else x[lo]
+    right = 0.5 * (x[hi] + x[hi + 1]) if hi + 1 < len(x) else x[hi]
+    return 0.5 * (right - left), 0.5 * (right + left), float(np.median(np.diff(x)))
