@@ -176,13 +176,10 @@ def _merge(pieces: list[dict]) -> dict:
     for name, parts in bodies.items():
         tops, types, xs, offset = [], [], [], 0
         for b in parts:
-            top = b["topology"].copy()
-            i = 0
-            while i < len(top):  # the flat VTK cell array: n, i_1..i_n, n, ...
-                n = top[i]
-                top[i + 1:i + 1 + n] += offset
-                i += n + 1
-            tops.append(top)
+            # the flat VTK cell array n, i_1..i_n, n, ... (one cell type per body mesh)
+            top = b["topology"].reshape(len(b["cell_types"]), -1).copy()
+            top[:, 1:] += offset
+            tops.append(top.ravel())
             types.append(b["cell_types"])
             xs.append(b["x"])
             offset += len(b["x"])
@@ -259,7 +256,8 @@ def _status_cmap():
 def _scalar_args(scalar: str, clim: tuple[float, float], bar: bool, title: str) -> dict:
     common = dict(show_scalar_bar=bar, nan_color=STATUS_COLORS[0])
     bar_args = dict(title="", vertical=False, height=0.09, width=0.5, position_x=0.33,
-                    position_y=0.05 if scalar == "status" else 0.02, title_font_size=16, label_font_size=14, color="black")
+                    position_y=0.05 if scalar == "status" else 0.02, title_font_size=16,
+                    label_font_size=14, color="black")
     if scalar == "status":
         return dict(common, cmap=_status_cmap(), clim=[0.5, 3.5], n_colors=3,
                     scalar_bar_args=dict(bar_args, n_labels=0),
