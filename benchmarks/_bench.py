@@ -51,7 +51,10 @@ for _p in (str(ROOT), str(DEMOS)):
 
 #: the interpreter that has pyvista (the demos import it) and dolfinx
 PYTHON = sys.executable
-MPIRUN_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
+#: Open MPI as root; ranks yield the core while they wait (the machine is oversubscribed by
+#: other jobs: busy-waiting ranks would steal the core from the rank they wait for)
+MPIRUN_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+              "OMPI_MCA_mpi_yield_when_idle": "1"}
 
 
 def work_dir(name: str) -> Path:
@@ -244,6 +247,32 @@ def demo_module(name: str):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+def profile_call(fn, top: int = 14):
+    """Run ``fn()`` under cProfile; return ``(its result, rows)``, rows = the ``top`` functions
+    by own time: ``(own seconds, cumulative seconds, calls, "file:line(function)")``, plus
+    the total profiled seconds as the last row ``(total, total, 0, "total")``."""
+    import cProfile
+    import pstats
+    prof = cProfile.Profile()
+    ret = prof.runcall(fn)
+    stats = pstats.Stats(prof)
+    rows = []
+    for (file, line, func), (cc, nc, tt, ct, _) in stats.stats.items():
+        short = "/".join(Path(file).parts[-2:]) if file != "~" else ""
+        rows.append((tt, ct, nc, f"{short}:{line}({func})" if short else func))
+    rows.sort(key=lambda r: -r[0])
+    return ret, rows[:top] + [(stats.total_tt, stats.total_tt, 0, "total")]
+
+
+def profile_table(rows, label: str = "") -> str:
+    total = rows[-1][0]
+    body = [[f"{100 * tt / total:.1f} %", f"{tt:.2f}", f"{ct:.2f}", nc, f"`{name}`"]
+            for tt, ct, nc, name in rows[:-1]]
+    return (f"{label}cProfile, top functions by own time (total {total:.1f} s profiled):\n\n"
+            + table(["share", "own [s]", "cumulative [s]", "calls", "function"], body,
+                    "rrrrl"))
 
 
 # ----------------------------------------------------------------------------- workers

@@ -1,10 +1,10 @@
 """Meshes of the benchmarks that no demo provides (built with gmsh on the calling rank).
 
-* :func:`quarter_sphere` -- the Hertz sphere of ``bench_hertz.py``: a quarter of the
-  lower hemisphere of a sphere of radius ``R`` resting on ``z = 0`` (rigid plane in the
-  benchmark), tetrahedra refined around the first contact point.  Written here because
-  ``demos/hertz_sphere.py`` did not exist when the benchmark was written; the other
-  Hertz geometry (the cylinder) is the demo's own ``build_mesh``.
+* :func:`quarter_sphere` -- a quarter of the lower hemisphere of a sphere of radius ``R``
+  resting on ``z = 0``, tetrahedra refined around the first contact point.  Written
+  because ``demos/hertz_sphere.py`` did not exist when ``bench_hertz.py`` was written;
+  that demo's ``build_mesh`` (same geometry and group names) is now used, this one only
+  if the demo is missing.
 * :func:`two_boxes` -- ``tests/meshes.two_boxes`` (block on a foundation, structured
   hexahedra) at a resolution given by one integer, with a foundation mesh chosen so that
   no slave node lies on an edge of a master face (there the choice of master face is
@@ -24,8 +24,8 @@ def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: f
 
     Tetrahedra of size ``h_contact`` within ``refine_radius`` of the origin, growing
     linearly (slope ``growth``) up to ``h_far``.  Groups: body ``sphere``; facets
-    ``sphere_surface`` (the curved surface), ``sphere_top`` (``z = R``), ``sym_x``
-    (``x = 0``), ``sym_y`` (``y = 0``).
+    ``sphere_surface`` (the curved surface), ``sphere_top`` (``z = R``),
+    ``sphere_symmetry_x`` (``x = 0``), ``sphere_symmetry_y`` (``y = 0``) -- as the demo's.
     """
     import gmsh
     gmsh.initialize()
@@ -41,9 +41,9 @@ def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: f
             if abs(c[2] - R) < 1e-6 * R:
                 names.setdefault("sphere_top", []).append(s)
             elif abs(c[0]) < 1e-6 * R:
-                names.setdefault("sym_x", []).append(s)
+                names.setdefault("sphere_symmetry_x", []).append(s)
             elif abs(c[1]) < 1e-6 * R:
-                names.setdefault("sym_y", []).append(s)
+                names.setdefault("sphere_symmetry_y", []).append(s)
             else:
                 names.setdefault("sphere_surface", []).append(s)
         f = gmsh.model.mesh.field

@@ -1,6 +1,6 @@
 """Cost of a Newton iteration by phase on 3D frictional scenes, and the contact overhead.
 
-    python benchmarks/bench_cost.py             # ~1.6e4 ... ~2.6e5 dofs (MUMPS), + GAMG beyond
+    python benchmarks/bench_cost.py             # ~1.6e4 ... ~2.6e5 dofs (MUMPS), GAMG at 1.1e5 and 4.3e5
     python benchmarks/bench_cost.py --quick     # two small sizes (< 2 min)
     python benchmarks/bench_cost.py --sizes 6,8 --iterative-sizes 20 --no-results
 
@@ -18,8 +18,9 @@ options database):
 * ``no contact`` -- the same mesh, bcs and steps with the contact pair removed (two
   independent linear bodies: 1 Newton iteration per increment);
 * beyond the sizes MUMPS handles here, ``contact`` and ``no contact`` with
-  ``petsc_options = {ksp_type: gmres, pc_type: gamg, ksp_rtol: 1e-10, ...}`` (no near
-  null space is passed: the solver API has no hook for it).
+  ``petsc_options = {ksp_type: gmres, pc_type: gamg, ksp_rtol: 1e-10, ksp_max_it: 1000,
+  ksp_gmres_restart: 200}`` (PETSc's GAMG defaults otherwise; no near null space and no block
+  size: the solver API has no hook for them).
 
 Reported per iteration (phase seconds / Newton iterations = linear solves): contact search,
 contact assembly (element evaluation, residual and Jacobian fill), bulk assembly (K u),
@@ -44,11 +45,10 @@ E, NU, MU = 1000.0, 0.3, 0.3
 PRESS, SLIDE = 0.005, 0.02
 PHASES = ("contact_search", "contact_assembly", "bulk_assembly", "linear_solve")
 GAMG = {"ksp_type": "gmres", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_atol": 0.0,
-        "ksp_max_it": 2000, "ksp_gmres_restart": 200, "pc_gamg_threshold": 0.02,
-        "mg_levels_ksp_type": "chebyshev", "mg_levels_pc_type": "jacobi"}
+        "ksp_max_it": 1000, "ksp_gmres_restart": 200}
 
-FULL_SIZES, FULL_REUSE, FULL_ITERATIVE = (6, 8, 10, 12, 16, 18), (6, 8, 10, 12), (20,)
-QUICK_SIZES, QUICK_REUSE, QUICK_ITERATIVE = (4, 6), (4, 6), ()
+FULL_SIZES, FULL_REUSE, FULL_ITERATIVE = (6, 8, 10, 12, 16, 18), (6, 8, 10, 12), (12, 20)
+QUICK_SIZES, QUICK_REUSE, QUICK_ITERATIVE = (4, 6), (4,), ()
 
 
 def scene(n: int, contact: bool = True, slide_increments: int = 2):
@@ -69,10 +69,16 @@ def scene(n: int, contact: bool = True, slide_increments: int = 2):
 
 def worker(args: list[str]) -> None:
     n, contact, reuse, solver = int(args[0]), args[1] == "1", args[2] == "1", args[3]
+    profile = len(args) > 4 and args[4] == "profile"
     kwargs = {"reuse_factorisation": reuse}
     if solver == "gamg":
         kwargs["petsc_options"] = dict(GAMG)
-    result, num = B.timed_run(scene(n, contact), **kwargs)
+    if profile:
+        (result, num), rows = B.profile_call(lambda: B.timed_run(scene(n, contact), **kwargs),
+                                             top=16)
+        num["profile"] = rows
+    else:
+        result, num = B.timed_run(scene(n, contact), **kwargs)
     num.update(n=n, contact=contact, reuse=reuse, solver=solver,
                reactions=[inc.reactions["block_top"].tolist() for inc in result.increments])
     B.emit(num)
@@ -234,6 +240,9 @@ def main(argv=None) -> None:
     ap.add_argument("--iterative-sizes")
     ap.add_argument("--no-results", action="store_true")
     ap.add_argument("--json", help="also write all rows to this file")
+    ap.add_argument("--profile", type=int, metavar="N",
+                    help="also profile (cProfile) the contact run at resolution N (default: the "
+                         "largest MUMPS size up to 12; 0: no profile)")
     args = ap.parse_args(argv)
     if args.worker:
         return worker(args.worker)
@@ -273,9 +282,19 @@ def main(argv=None) -> None:
         rows.append(row)
         if args.json:
             Path(args.json).write_text(json.dumps(rows, indent=1))
+    prof_n = args.profile if args.profile is not None else (0 if args.quick else max(
+        [n for n in sizes if n <= 12], default=0))
+    prof = None
+    if prof_n:
+        prof = B.run_worker(Path(__file__), [str(prof_n), "1", "0", "mumps", "profile"])
+        print(B.profile_table(prof["profile"]))
     figure = chart(rows, machine)
     print(f"chart: {figure}")
     text = report(rows, machine, B.load_average(), args.quick, figure)
+    if prof:
+        text += ("\n\n" + B.profile_table(
+            prof["profile"], f"Profile of the contact run at n = {prof_n} ({prof['dofs']:,} "
+                             f"dofs, {prof['newton']} Newton iterations), "))
     print(text)
     if not args.no_results:
         B.write_section("Cost per Newton iteration and contact overhead (3D, frictional)", text)

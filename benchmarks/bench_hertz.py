@@ -11,9 +11,11 @@ automatic cutbacks, serial, MUMPS):
   (its ``build_mesh``: R = 10, quadrilaterals refined around the first contact point) pressed
   onto a *rigid* plane ``y = 0`` (the demo's elastic block is left out of the scene), E = 1000,
   nu = 0.3, flat top pushed down by ``D2`` (contact half-width a ~ 0.5, a/R ~ 0.05).
-* **3D** -- Hertz point contact: a quarter of the lower hemisphere of a sphere (R = 10,
-  tetrahedra, ``benchmarks/_meshes.quarter_sphere``) pressed onto a rigid plane ``z = 0``,
-  symmetry on ``x = 0`` and ``y = 0``, top pushed down by ``D3`` (a ~ 0.5).
+* **3D** -- Hertz point contact: the eighth of a sphere of ``demos/hertz_sphere.py`` (its
+  ``build_mesh``: R = 10, centre (0, 0, R), x, y >= 0, z <= R, tetrahedra refined at the
+  pole; ``benchmarks/_meshes.quarter_sphere`` is the same geometry, used only if the demo is
+  missing) pressed onto a rigid plane ``z = 0``, symmetry on ``x = 0`` and ``y = 0``, top
+  pushed down by ``D3`` (a ~ 0.5).
 
 Series: contact-zone element size ``h = A_NOMINAL / n``, degree 1 and 2 (the displacement
 space; the geometry stays first order), penalty ``K = k E / h`` with k = 1, 10, 100, 1000.
@@ -52,7 +54,7 @@ D2, D3 = 0.04, 0.05  # prescribed approach of the top (2D, 3D)
 KS = (1, 10, 100, 1000)
 
 FULL = {"2d": {1: (4, 8, 16, 32, 64), 2: (4, 8, 16, 32)},
-        "3d": {1: (2, 4, 6, 8, 12), 2: (2, 3, 4, 6)}}
+        "3d": {1: (2, 3, 4, 6, 8, 12, 16), 2: (2, 3, 4, 6, 8)}}
 QUICK = {"2d": {1: (4, 8), 2: (4,)},
          "3d": {1: (2, 3), 2: (2,)}}
 QUICK_KS = (10, 1000)
@@ -82,11 +84,16 @@ def mesh_2d(n: int) -> Path:
 
 
 def mesh_3d(n: int) -> Path:
-    from _meshes import quarter_sphere
-    path = B.work_dir("hertz") / f"sphere_n{n}.msh"
+    demo = B.demo_module("hertz_sphere")
+    path = B.work_dir("hertz") / f"sphere_n{n}{'' if demo else '_own'}.msh"
     if not path.exists():
-        quarter_sphere(path, R=R, h_contact=A_NOMINAL / n, h_far=2.0,
-                       refine_radius=2.0 * A_NOMINAL, growth=0.3)
+        if demo is not None:  # the demo's eighth of a sphere (tetrahedra, refined at the pole)
+            demo.build_mesh(path, with_block=False, h_contact=A_NOMINAL / n, h_far=2.0,
+                            refine_radius=2.0 * A_NOMINAL)
+        else:  # fallback with the same groups (benchmarks/_meshes.py)
+            from _meshes import quarter_sphere
+            quarter_sphere(path, R=R, h_contact=A_NOMINAL / n, h_far=2.0,
+                           refine_radius=2.0 * A_NOMINAL, growth=0.2)
     return path
 
 
@@ -108,7 +115,7 @@ def scene(problem: str, n: int, degree: int, k: float):
         rigids=(Rigid("floor", "plane", point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0)),),
         contacts=(ContactPair("sphere_surface", "floor", K=k * E / h),),
         steps=(Step("press", increments=1, bcs=(
-            BC("sym_x", (0.0, None, None)), BC("sym_y", (None, 0.0, None)),
+            BC("sphere_symmetry_x", (0.0, None, None)), BC("sphere_symmetry_y", (None, 0.0, None)),
             BC("sphere_top", (0.0, 0.0, -D3)))),),
         output=out)
 
@@ -260,8 +267,8 @@ def report(all_rows: dict, machine: dict, load_end: float, quick: bool, figures:
     out = [
         "`benchmarks/bench_hertz.py`" + (" --quick" if quick else "") + ": Hertz line contact "
         "(2D plane strain, the quarter disk of `demos/hertz_cylinder.py`'s `build_mesh`, R = 10, "
-        "quadrilaterals) and Hertz sphere (3D quarter model, R = 10, tetrahedra from "
-        "`benchmarks/_meshes.py`: no sphere demo existed) pressed onto a rigid plane, "
+        "quadrilaterals) and Hertz sphere (3D, the eighth of a sphere of "
+        "`demos/hertz_sphere.py`'s `build_mesh`, R = 10, tetrahedra) pressed onto a rigid plane, "
         f"frictionless, E = {E:g}, nu = {NU}; top pushed by {D2} (2D) / {D3} (3D), giving "
         f"a ~ {A_NOMINAL} (a/R ~ 0.05); contact-zone element size h = {A_NOMINAL}/n; one load "
         "increment (automatic cutbacks allowed); serial, MUMPS.",

@@ -181,7 +181,8 @@ def main(argv=None) -> None:
     print(f"normal load P = {P:.4f} (after step 1: {P1:.4f}), tangential load Q = {Q:.4f} "
           f"(applied {Q_applied:.4f}), Q/(mu P) = {Q / (MU * P):.4f}")
     print(f"contact half-width: Hertz a = {a:.4f}, closed nodes span +-{a_num:.4f}")
-    print(f"stick half-width: c = {c_num:.4f} +- {0.5 * spacing:.4f} (centre {shift:+.4f}) vs a sqrt(1 - Q/(mu P)) = "
+    print(f"stick half-width: c = {c_num:.4f} +- {0.5 * spacing:.4f} (centre {shift:+.4f}) "
+          f"vs a sqrt(1 - Q/(mu P)) = "
           f"{c_ref:.4f} ({C.relerr(c_num, c_ref)}; node spacing {spacing:.4f} = "
           f"{100 * spacing / c_ref:.1f} % of c)")
     slip = status == 2

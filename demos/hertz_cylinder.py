@@ -15,7 +15,7 @@ pressures and also reports the largest nodal pressure; a picture of the
 profile against Hertz is written next to the results.
 
     python demos/hertz_cylinder.py
-    python -m dolfinx_friction run demos/hertz_cylinder.toml [--set body.0.degree=2 --set body.1.degree=2]
+    python -m dolfinx_friction run demos/hertz_cylinder.toml [--set body.0.degree=2]
 """
 from __future__ import annotations
 
@@ -24,7 +24,8 @@ from pathlib import Path
 import _common as C  # noqa: F401  (pyvista before dolfinx)
 import numpy as np
 
-from dolfinx_friction.analytic import effective_modulus, hertz_line, hertz_line_pressure
+from dolfinx_friction.analytic import (effective_modulus, fit_elliptic, hertz_line,
+                                       hertz_line_pressure)
 
 SCENE = C.HERE / "hertz_cylinder.toml"
 MESH = C.HERE / "hertz_cylinder.msh"
@@ -109,14 +110,6 @@ def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
         gmsh.finalize()
 
 
-def fit_elliptic(x: np.ndarray, p: np.ndarray) -> tuple[float, float]:
-    """(a, p0) of ``p^2 = p0^2 (1 - x^2/a^2)`` by least squares on the nodes with p > 0.2 max."""
-    keep = p > 0.2 * p.max()
-    A = np.column_stack([np.ones(keep.sum()), x[keep] ** 2])
-    c0, c1 = np.linalg.lstsq(A, p[keep] ** 2, rcond=None)[0]
-    return float(np.sqrt(-c0 / c1)), float(np.sqrt(c0))
-
-
 def profile_plot(path: Path, x, p, P, E_star, a_fit, title: str) -> None:
     import matplotlib
     matplotlib.use("Agg")
@@ -124,7 +117,8 @@ def profile_plot(path: Path, x, p, P, E_star, a_fit, title: str) -> None:
     a, p0 = hertz_line(P, R, E_star)
     xs = np.linspace(0, 1.6 * a, 400)
     fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
-    ax.plot(xs, hertz_line_pressure(xs, P, R, E_star), "k-", label=f"Hertz: a = {a:.4f}, p0 = {p0:.3f}")
+    ax.plot(xs, hertz_line_pressure(xs, P, R, E_star), "k-",
+            label=f"Hertz: a = {a:.4f}, p0 = {p0:.3f}")
     ax.plot(x, p, "o", ms=4, color="#d62728", label="nodal F_N / A_p")
     ax.axvline(a_fit, color="#1f77b4", ls=":", label=f"fitted a = {a_fit:.4f}")
     ax.set_xlabel("x (distance from the symmetry plane)")
@@ -165,7 +159,8 @@ def main(argv=None) -> None:
     print(f"nodal:   p_max = {p.max():.4f} ({C.relerr(p.max(), p0)})   last closed node at "
           f"x = {x.max():.4f}, first open at {x_first_open:.4f} (a = {a:.4f})")
     print(f"fitted:  a = {a_fit:.4f} ({C.relerr(a_fit, a)})   p0 = {p0_fit:.4f} "
-          f"({C.relerr(p0_fit, p0)})   [p^2 = p0^2 (1 - x^2/a^2) on {int((p > 0.2 * p.max()).sum())} nodes]")
+          f"({C.relerr(p0_fit, p0)})   [p^2 = p0^2 (1 - x^2/a^2) on "
+          f"{int((p > 0.2 * p.max()).sum())} nodes]")
     inside = x < 0.9 * a
     err = np.abs(p[inside] - hertz_line_pressure(x[inside], P, R, E_star)).max() / p0
     print(f"max |p - p_Hertz| / p0 over |x| < 0.9 a: {100 * err:.2f} %")

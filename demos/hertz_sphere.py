@@ -26,7 +26,8 @@ from pathlib import Path
 import _common as C  # noqa: F401  (pyvista before dolfinx)
 import numpy as np
 
-from dolfinx_friction.analytic import effective_modulus, hertz_sphere, hertz_sphere_pressure
+from dolfinx_friction.analytic import (effective_modulus, fit_elliptic, hertz_sphere,
+                                       hertz_sphere_pressure)
 
 SCENE = C.HERE / "hertz_sphere.toml"
 MESHES = {"hertz_sphere.toml": (C.HERE / "hertz_sphere.msh", False),
@@ -130,14 +131,6 @@ def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
         gmsh.write(str(path))
     finally:
         gmsh.finalize()
-
-
-def fit_elliptic(r: np.ndarray, p: np.ndarray) -> tuple[float, float]:
-    """(a, p0) of ``p^2 = p0^2 (1 - r^2/a^2)`` by least squares on the nodes with p > 0.2 max."""
-    keep = p > 0.2 * p.max()
-    A = np.column_stack([np.ones(keep.sum()), r[keep] ** 2])
-    c0, c1 = np.linalg.lstsq(A, p[keep] ** 2, rcond=None)[0]
-    return float(np.sqrt(-c0 / c1)), float(np.sqrt(c0))
 
 
 def profile_plot(path: Path, r, p, F, E_star, a_fit, title: str) -> None:

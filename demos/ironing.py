@@ -2,8 +2,8 @@
 
 Plane strain.  A block (20 x 5, E = 10, nu = 0.3, bottom fixed) is indented
 by a stiff elastic half disk (radius 2, E = 10^4, i.e. 1000 times stiffer)
-whose flat top is moved down by 0.5 in 4 increments, then 8 along x in 64
-increments at that depth.  The block top is the slave surface, the indenter's
+whose flat top is moved down by 0.5 in 4 increments, then 4 (one indenter
+diameter) along x in 64 increments at that depth.  The block top is the slave surface, the indenter's
 arc the master.  (A rigid ``[[rigid]]`` circle in place of the elastic
 indenter does not converge with large drag increments: see demos/README.md.)
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import _common as C  # noqa: F401  (pyvista before dolfinx)
-import numpy as np
 
 SCENE = C.HERE / "sliding_block.toml"
 MESH = C.HERE / "sliding_block.msh"
@@ -90,8 +89,8 @@ def main(argv=None) -> None:
     if not args.no_render:
         C.render(result, "sliding_block_pressure", warp=50.0, amplify="deformation",
                  title="block slid on a foundation, mu = 0.3")
-        C.render(result, "sliding_block_status", scalar="status", warp=50.0, amplify="deformation",
-                 title="block slid on a foundation, mu = 0.3")
+        C.render(result, "sliding_block_status", scalar="status", warp=50.0,
+                 amplify="deformation", title="block slid on a foundation, mu = 0.3")
     C.root_print("increment  slipping/active   -R_x/R_z (platen)")
     for inc in result.increments:
         R = inc.reactions["block_top"]

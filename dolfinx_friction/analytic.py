@@ -96,7 +96,8 @@ def hertz_line_load(a: float, R: float, E_star: float) -> float:
 
 
 def hertz_line_pressure(x, P: float, R: float, E_star: float) -> np.ndarray:
-    """Pressure ``p(x) = p0 sqrt(1 - x^2/a^2)`` for ``|x| < a``, 0 outside (``x`` from the centre)."""
+    """Pressure ``p(x) = p0 sqrt(1 - x^2/a^2)`` for ``|x| < a``, 0 outside (``x``: from the
+    centre)."""
     a, p0 = hertz_line(P, R, E_star)
     x = np.asarray(x, dtype=float)
     return p0 * np.sqrt(np.clip(1.0 - (x / a) ** 2, 0.0, None))
@@ -215,6 +216,24 @@ def incline_hold_ratio(tan_alpha: float, mu: float) -> float:
     return (tan_alpha - mu) / (1.0 + mu * tan_alpha)
 
 
+# ------------------------------------------------------------------ fitting
+def fit_elliptic(x: np.ndarray, p: np.ndarray, floor: float = 0.2) -> tuple[float, float]:
+    """``(a, p0)`` of the Hertz profile ``p^2 = p0^2 (1 - x^2/a^2)`` fitted by least squares
+    to nodal pressures ``p`` at distances ``x`` from the centre (nodes with p > floor max p).
+
+    Exact for exact Hertz data:
+
+    >>> x = np.linspace(0.0, 0.9, 10)
+    >>> [round(v, 12) for v in fit_elliptic(x, 3.0 * np.sqrt(1.0 - (x / 1.5) ** 2))]
+    [1.5, 3.0]
+    """
+    x, p = np.asarray(x, float), np.asarray(p, float)
+    keep = p > floor * p.max()
+    A = np.column_stack([np.ones(keep.sum()), x[keep] ** 2])
+    c0, c1 = np.linalg.lstsq(A, p[keep] ** 2, rcond=None)[0]
+    return float(np.sqrt(-c0 / c1)), float(np.sqrt(c0))
+
+
 # --------------------------------------------------------------- self-check
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz  # numpy 2 renamed trapz
 
@@ -301,13 +320,3 @@ if __name__ == "__main__":
     failures, tests = doctest.testmod()
     print(f"doctest: {tests - failures}/{tests} passed")
     raise SystemExit(1 if failures else 0)
-
-
-def fit_elliptic(x: np.ndarray, p: np.ndarray, floor: float = 0.2) -> tuple[float, float]:
-    """``(a, p0)`` of the Hertz profile ``p^2 = p0^2 (1 - x^2/a^2)`` fitted by least squares
-    to nodal pressures ``p`` at distances ``x`` from the centre (nodes with p > floor max p)."""
-    x, p = np.asarray(x, float), np.asarray(p, float)
-    keep = p > floor * p.max()
-    A = np.column_stack([np.ones(keep.sum()), x[keep] ** 2])
-    c0, c1 = np.linalg.lstsq(A, p[keep] ** 2, rcond=None)[0]
-    return float(np.sqrt(-c0 / c1)), float(np.sqrt(c0))

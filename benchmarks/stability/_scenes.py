@@ -12,6 +12,8 @@ Three families, all small enough for a sweep of hundreds of runs:
   soft block and dragged along it, mu = 0.3), coarse; without the demo, a stiff elastic
   half-cylinder punch (slave) pressed into an elastic strip and slid (built here).
 * ``block3d`` -- the 3D sliding block demo (``demos/sliding_block.py``), coarse.
+* ``groove`` -- a convex slave tip pressed into a concave V-groove: the face chattering
+  that the pairing freeze exists for.
 
 :func:`run_case` runs one case dictionary in memory and returns its outcome (converged /
 converged after cutbacks / failed / error), iteration counts, the penetration ratio and
@@ -178,6 +180,49 @@ def build_ironing(path: Path, h_slave: float = 0.1, ratio: float = 1.0) -> Path:
     return path
 
 
+# --------------------------------------------------------------------------- groove (2D)
+def build_groove(path: Path, h: float = 0.0625, slope_master: float = 0.1,
+                 slope_slave: float = 0.2) -> Path:
+    """A block whose bottom is a convex V (tip at (0.5, 0)) over a foundation whose top is a
+    concave V-groove (bottom at (0.5, 0)): the tip node sits on the edge between the two
+    groove faces, each of which pushes it towards the other.  Groups: bodies ``block``,
+    ``foundation``; edges ``tip``, ``block_top``, ``groove``, ``foundation_bottom``.
+    """
+    import gmsh
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("groove")
+        geo = gmsh.model.geo
+        f = [geo.addPoint(0, -0.5, 0, h), geo.addPoint(1, -0.5, 0, h),
+             geo.addPoint(1, 0.5 * slope_master, 0, h), geo.addPoint(0.5, 0, 0, h),
+             geo.addPoint(0, 0.5 * slope_master, 0, h)]
+        fl = [geo.addLine(f[i], f[(i + 1) % 5]) for i in range(5)]
+        fs = geo.addPlaneSurface([geo.addCurveLoop(fl)])
+        b = [geo.addPoint(0.25, 0.25 * slope_slave, 0, h), geo.addPoint(0.5, 0, 0, h),
+             geo.addPoint(0.75, 0.25 * slope_slave, 0, h), geo.addPoint(0.75, 0.3, 0, h),
+             geo.addPoint(0.25, 0.3, 0, h)]
+        bl = [geo.addLine(b[i], b[(i + 1) % 5]) for i in range(5)]
+        bs = geo.addPlaneSurface([geo.addCurveLoop(bl)])
+        for line in bl[:2]:
+            geo.mesh.setTransfiniteCurve(line, round(0.25 / h) + 1)
+        for line in fl[2:4]:
+            geo.mesh.setTransfiniteCurve(line, round(0.5 / h) + 1)
+        geo.synchronize()
+        _group(gmsh, 2, [fs], "foundation")
+        _group(gmsh, 2, [bs], "block")
+        _group(gmsh, 1, fl[2:4], "groove")
+        _group(gmsh, 1, [fl[0]], "foundation_bottom")
+        _group(gmsh, 1, bl[:2], "tip")
+        _group(gmsh, 1, [bl[3]], "block_top")
+        gmsh.model.mesh.generate(2)
+        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return path
+
+
 # ----------------------------------------------------------------------------- demos
 def demo_module(name: str):
     """``demos/<name>.py`` imported without its pyvista helper (None if absent)."""
@@ -248,7 +293,10 @@ def block_scene(case: dict):
         increments = max(1, round(slide / (case["slide_faces"] * h_m)))
     else:
         increments = int(case.get("increments", 10))
-    press = PRESS + max(gap, 0.0)
+    # an initial gap is closed first; an initial penetration is ramped out over the press
+    # step and then acts in full (contact-theory.md 3.4), so the top moves by PRESS + gap
+    # in both cases: every gap ends in the zero-gap state
+    press = PRESS + gap
     kw = _step_kw(case)
     steps = [Step("press", increments=int(case.get("press_increments", 1)),
                   bcs=(BC("foundation_bottom", (0.0, 0.0)), BC("block_top", (0.0, -press))), **kw)]
@@ -289,39 +337,58 @@ def hertz_scene(case: dict):
 
 
 def ironing_scene(case: dict):
-    """Ironing: ``demos/ironing.py`` (a rigid circle dragged over a soft block) if present,
-    else the deformable punch of :func:`build_ironing`.
+    """Ironing: ``demos/ironing.py`` if present (its ``build_mesh`` and ``ironing.toml``:
+    a die pressed into a soft block, slave = block top, then dragged along it), coarse;
+    otherwise the deformable punch of :func:`build_ironing`.
 
-    Demo keys: ``nx`` (block elements along its length 20, default 40: h = 0.5), ``ny`` (8),
-    ``travel`` (drag distance, 4; the demo's 12 costs three times more),
-    ``slide_faces`` (drag per increment in slave spacings) or ``increments`` (24 as in the
-    demo), ``press_increments`` (4), ``k``, ``lam``, ``mu`` (0.3), ...
+    The demo's die is driven either as a ``[[rigid]]`` obstacle or through a bc on its
+    top face; both are handled.  Keys: ``nx`` (block elements along its length 20,
+    default 40: h = 0.5), ``ny`` (8), ``n_arc`` (elements on the die's arc if the demo has
+    them, 16), ``travel`` (drag distance, 4; the demo's is longer), ``slide_faces`` (drag per
+    increment in master faces -- the die's arc elements, or slave spacings for a rigid
+    die) or ``increments``, ``press_increments`` (as in the demo), ``k``, ``lam``, ``mu``.
     """
+    import inspect
     demo = demo_module("ironing")
     kw = _step_kw(case)
     if demo is not None and (DEMOS / "ironing.toml").exists():
         from dolfinx_friction.scene import load_scene
         base = load_scene(DEMOS / "ironing.toml")
-        nx, ny = int(case.get("nx", 40)), int(case.get("ny", 8))
-        mesh = cached_mesh("ironing_demo", demo.build_mesh, nx=nx, ny=ny)
-        h = demo.LENGTH / nx
+        params = dict(nx=int(case.get("nx", 40)), ny=int(case.get("ny", 8)))
+        accepted = inspect.signature(demo.build_mesh).parameters
+        if "n_arc" in accepted:
+            params["n_arc"] = int(case.get("n_arc", 16))
+        mesh = cached_mesh("ironing_demo", demo.build_mesh, **params)
+        h = demo.LENGTH / params["nx"]
         c = base.contacts[0]
-        pair = _contact(case, c.slave, c.master, h, base.bodies[0].E, c.mu)
-        press, drag = base.steps
-        # the demo drags the die by 12; the maps drag it by ``travel`` (4: 8 block elements)
-        start, end = press.rigid[0].displacement, drag.rigid[0].displacement
+        slave_body = next((b for b in base.bodies if c.slave.startswith(b.name)), base.bodies[0])
+        pair = _contact(case, c.slave, c.master, h, slave_body.E, c.mu)
+        press, drag = base.steps[0], base.steps[-1]
         travel = float(case.get("travel", 4.0))
-        drag = replace(drag, rigid=(replace(drag.rigid[0], displacement=(
-            start[0] + travel, *end[1:])),))
+        if press.rigid:  # a [[rigid]] die
+            start, end = press.rigid[0].displacement, drag.rigid[0].displacement
+            drag = replace(drag, rigid=(replace(drag.rigid[0], displacement=(
+                start[0] + travel, *end[1:])),))
+            info = dict(rigid=press.rigid[0].name)
+            h_master = h
+        else:  # an elastic die driven through its top face
+            moved = drag.bcs[-1]
+            start = next(b.u for b in press.bcs if b.on == moved.on)
+            bcs = tuple(b if b.on != moved.on else replace(b, u=(start[0] + travel, *b.u[1:]))
+                        for b in drag.bcs)
+            drag = replace(drag, bcs=bcs)
+            info = dict(reaction=moved.on)
+            radius = getattr(demo, "RADIUS", 2.0)
+            h_master = math.pi * radius / params["n_arc"] if "n_arc" in params else h
         if "slide_faces" in case:
-            increments = max(1, round(travel / (case["slide_faces"] * h)))
+            increments = max(1, round(travel / (case["slide_faces"] * h_master)))
         else:
             increments = int(case.get("increments", drag.increments))
         steps = (replace(press, increments=int(case.get("press_increments", press.increments)),
                          **kw),
                  replace(drag, increments=increments, **kw))
-        return (replace(base, mesh=mesh, contacts=(pair,), steps=steps),
-                dict(h=h, rigid=c.master, increments=increments, source="demos/ironing.py"))
+        info.update(h=h, h_master=h_master, increments=increments, source="demos/ironing.py")
+        return replace(base, mesh=mesh, contacts=(pair,), steps=steps), info
     from dolfinx_friction.model import BC, Body, Scene, Step
     h = float(case.get("h", 0.1))
     ratio = float(case.get("ratio", 1.0))
@@ -358,8 +425,24 @@ def block3d_scene(case: dict):
             dict(h=h, reaction="block_top", increments=steps[-1].increments))
 
 
+def groove_scene(case: dict):
+    """The convex tip pressed 0.005 into the concave V-groove (:func:`build_groove`);
+    ``increments`` (1), ``k``, ``mu`` (0), ``pairing``, ... (tests/verification/
+    test_stability.py pins the chattering it shows)."""
+    from dolfinx_friction.model import BC, Body, Scene, Step
+    h = 0.0625
+    mesh = cached_mesh("groove", build_groove, h=h)
+    kw = _step_kw(case)
+    steps = (Step("press", increments=int(case.get("increments", 1)),
+                  bcs=(BC("foundation_bottom", (0.0, 0.0)), BC("block_top", (0.0, -0.005))),
+                  **kw),)
+    scene = Scene(mesh=mesh, bodies=(Body("block", E, NU), Body("foundation", E, NU)),
+                  contacts=(_contact(case, "tip", "groove", h, E, 0.0),), steps=steps)
+    return scene, dict(h=h, reaction="block_top", increments=steps[0].increments)
+
+
 SCENES = {"block": block_scene, "hertz": hertz_scene, "ironing": ironing_scene,
-          "block3d": block3d_scene}
+          "block3d": block3d_scene, "groove": groove_scene}
 
 
 # ------------------------------------------------------------------------------ runs
