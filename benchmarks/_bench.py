@@ -78,7 +78,15 @@ def machine() -> dict:
     mem = 0.0
     with contextlib.suppress(OSError, ValueError, IndexError):
         mem = int(Path("/proc/meminfo").read_text().split()[1]) / 2 ** 20
-    return {"nproc": os.cpu_count(), "cpu": cpu, "ram_gib": round(mem, 1),
+    commit = ""
+    with contextlib.suppress(OSError, subprocess.SubprocessError):
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
+                                capture_output=True, text=True, timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "dolfinx_friction"], cwd=ROOT,
+                               capture_output=True, text=True, timeout=10).stdout.strip()
+        if commit and dirty:
+            commit += f" + uncommitted changes in {len(dirty.splitlines())} package file(s)"
+    return {"nproc": os.cpu_count(), "cpu": cpu, "ram_gib": round(mem, 1), "commit": commit,
             "date": datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
             "load": [round(x, 2) for x in os.getloadavg()],
             "python": platform.python_version()}
@@ -86,9 +94,10 @@ def machine() -> dict:
 
 def machine_line(m: dict, load_end: float | None = None) -> str:
     end = f" / {load_end:.1f} at the end" if load_end is not None else ""
+    pkg = f"; package at commit {m['commit']}" if m.get("commit") else ""
     return (f"machine: {m['nproc']} cores (nproc), CPU `{m['cpu']}`, {m['ram_gib']:.0f} GiB RAM, "
             f"{m['date']}; 1-min load average {m['load'][0]:.1f} at the start{end} "
-            f"(other jobs share the machine)")
+            f"(other jobs share the machine){pkg}")
 
 
 def peak_rss_mib() -> float:

@@ -24,6 +24,7 @@ depend on the other jobs.
 from __future__ import annotations
 
 import argparse
+import json
 import re
 import sys
 import time
@@ -183,6 +184,7 @@ def main(argv=None) -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--sizes")
     ap.add_argument("--no-results", action="store_true")
+    ap.add_argument("--json", help="also write the measured rows to this file")
     args = ap.parse_args(argv)
     from dolfinx_friction import calculix
     if not calculix.ccx_available():
@@ -203,6 +205,8 @@ def main(argv=None) -> None:
               f"{r['ccx_wall']:.1f} s | ratio cpu {o['cpu'] / r['ccx_cpu']:.2f} wall "
               f"{o['wall'] / r['ccx_wall']:.2f} | max dR/R {100 * r['worst']:.3f} % | load "
               f"{B.load_average():.1f}", flush=True)
+        if args.json:
+            Path(args.json).write_text(json.dumps(rows, indent=1))
     figure = chart(rows, machine)
     text = report(rows, machine, B.load_average(), args.quick, figure)
     print(text)

@@ -26,6 +26,7 @@ Target: median <= 3 Newton iterations per increment at the default tolerance.
 from __future__ import annotations
 
 import argparse
+import json
 import dataclasses
 import math
 import statistics
@@ -210,6 +211,7 @@ def main(argv=None) -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--demos", default=",".join(DEMOS))
     ap.add_argument("--no-results", action="store_true")
+    ap.add_argument("--json", help="also write the measured rows to this file")
     args = ap.parse_args(argv)
     machine = B.machine()
     rows, missing = [], []
@@ -233,6 +235,8 @@ def main(argv=None) -> None:
                       flush=True)
             else:
                 print(f"{name:16s} {tangent:10s} FAILED: {r['error']}", flush=True)
+            if args.json:
+                Path(args.json).write_text(json.dumps(rows, indent=1))
     figure = chart(rows, machine)
     print(f"chart: {figure}")
     text = report(rows, machine, B.load_average(), args.quick, figure, missing)

@@ -30,8 +30,11 @@ from dolfinx_friction.analytic import (effective_modulus, fit_elliptic, hertz_sp
                                        hertz_sphere_pressure)
 
 SCENE = C.HERE / "hertz_sphere.toml"
-MESHES = {"hertz_sphere.toml": (C.HERE / "hertz_sphere.msh", False),
-          "hertz_sphere_block.toml": (C.HERE / "hertz_sphere_block.msh", True)}
+# scene -> (mesh, build_mesh arguments)
+MESHES = {"hertz_sphere.toml": (C.HERE / "hertz_sphere.msh",
+                                dict(with_block=False, h_contact=0.12)),
+          "hertz_sphere_block.toml": (C.HERE / "hertz_sphere_block.msh",
+                                      dict(with_block=True, h_contact=0.15))}
 R, E, NU = 10.0, 1000.0, 0.3
 BLOCK = (20.0, 10.0)  # quarter-block side, depth
 
@@ -158,8 +161,9 @@ def profile_plot(path: Path, r, p, F, E_star, a_fit, title: str) -> None:
 def main(argv=None) -> None:
     args = C.parse_args(__doc__.splitlines()[0], argv)
     scene = Path(args.scene).resolve() if args.scene else SCENE
-    mesh, with_block = MESHES.get(scene.name, MESHES["hertz_sphere.toml"])
-    C.ensure_mesh(mesh, build_mesh, args.rebuild, with_block=with_block)
+    mesh, resolution = MESHES.get(scene.name, MESHES["hertz_sphere.toml"])
+    with_block = resolution["with_block"]
+    C.ensure_mesh(mesh, build_mesh, args.rebuild, **resolution)
     result, seconds = C.run_scene(scene, args)
     C.report(result, seconds)
     name = scene.stem

@@ -135,7 +135,6 @@ class ContactInteraction:
         X = np.concatenate([f[1] for f in incoming]).reshape(-1, m.face.n_nodes, self.gdim)
         self._faces = (nodes, X)
         self._face_ids = np.concatenate([f[2] for f in incoming])
-        self._radius = radius
 
     def search(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray]) -> None:
         """Candidate masters of every slave node, once per increment (collective).
@@ -161,7 +160,7 @@ class ContactInteraction:
         self._gather = NodeValues(u, self._faces[0].ravel(), self.gdim)
         face_nodes, X_f = self._faces
         x_f = X_f + self._gather(u).reshape(X_f.shape)
-        slave, face = _nearest_faces(x_s, x_f, self._radius, 16 if self.gdim == 3 else 6)
+        slave, face = _nearest_faces(x_s, x_f, 16 if self.gdim == 3 else 6)
         nodes = np.concatenate([face_nodes[face], self.slaves.nodes[slave, None]], axis=1)
         self.candidates = _Candidates(slave, face, nodes)
 
@@ -301,13 +300,15 @@ def _face_size(x_faces: np.ndarray) -> np.ndarray:
     return np.linalg.norm(x_faces - c, axis=2).max(axis=1) if len(x_faces) else np.zeros(0)
 
 
-def _nearest_faces(x_slaves: np.ndarray, x_faces: np.ndarray, radius: float, k: int
+def _nearest_faces(x_slaves: np.ndarray, x_faces: np.ndarray, k: int
                    ) -> tuple[np.ndarray, np.ndarray]:
-    """(slave, face) pairs: the ``k`` faces with the nearest centroids within ``radius``."""
+    """(slave, face) pairs: the ``k`` faces with the nearest centroids."""
     if len(x_slaves) == 0 or len(x_faces) == 0:
         return np.zeros(0, int), np.zeros(0, int)
     k = min(k, len(x_faces))
-    dist, face = cKDTree(x_faces.mean(axis=1)).query(x_slaves, k=k, distance_upper_bound=radius)
+    # no distance bound: a node driven deep into the master (by a large increment or an
+    # initial overlap) keeps its candidates; projection and cutoff decide on elements
+    dist, face = cKDTree(x_faces.mean(axis=1)).query(x_slaves, k=k)
     slave = np.repeat(np.arange(len(x_slaves)), k)
     face, dist = face.reshape(-1), dist.reshape(-1)
     found = np.isfinite(dist)

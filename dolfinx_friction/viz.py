@@ -414,6 +414,7 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
                 dist = 3.0 * float(np.linalg.norm(view_hi - view_lo))
                 pl.camera_position = [tuple(c + dist * direction), tuple(c), (0.0, 0.0, 1.0)]
             pl.reset_camera(bounds=box)
+            pl.camera.zoom(0.9)
         label = title if (title and col == 0) else None
         text = {"overview": f"deformed, displacements x{warp:g}" if amplify == "total"
                 else f"deformed, deformation x{warp:g} (about the mean translation)",
