@@ -59,6 +59,7 @@ from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 
+from dolfinx_friction.gmsh_io import gmsh_file
 from dolfinx_friction.model import ContactPair, Scene
 
 __all__ = ["CCX_FACES", "CcxError", "CcxRun", "ccx_available", "ccx_executable", "parse_dat",
@@ -263,46 +264,10 @@ def _extract(gmsh, body_names: Sequence[str], where: str) -> CcxMesh:
 
 def read_mesh(source: Union[str, Path, Any], body_names: Sequence[str]) -> CcxMesh:
     """Read a Gmsh mesh (a ``.msh`` file or the live ``gmsh`` module) in CalculiX numbering."""
-    import gmsh
-
     if not isinstance(source, (str, os.PathLike)):
         return _extract(source, body_names, f"gmsh model '{source.model.getCurrent()}'")
-    path = Path(source)
-    if not path.is_file():
-        raise FileNotFoundError(f"mesh file '{path}' does not exist")
-    own = not _gmsh_initialized(gmsh)
-    if own:
-        gmsh.initialize()
-    previous = None if own else gmsh.model.getCurrent()
-    terminal = gmsh.option.getNumber("General.Terminal")
-    gmsh.option.setNumber("General.Terminal", 0)
-    name = f"dolfinx_friction_ccx_{os.getpid()}_{time.monotonic_ns()}"
-    try:
-        gmsh.model.add(name)
-        gmsh.merge(str(path))
-        return _extract(gmsh, body_names, f"mesh file '{path}'")
-    finally:
-        try:
-            gmsh.model.setCurrent(name)
-            gmsh.model.remove()
-        except Exception:  # pragma: no cover
-            pass
-        if own:
-            gmsh.finalize()
-        else:
-            gmsh.option.setNumber("General.Terminal", terminal)
-            if previous is not None and previous in gmsh.model.list():
-                gmsh.model.setCurrent(previous)
-
-
-def _gmsh_initialized(gmsh) -> bool:
-    f = getattr(gmsh, "isInitialized", None)
-    if f is not None:
-        return bool(f())
-    try:  # pragma: no cover - gmsh < 4.9
-        return gmsh.option.getString("General.Version") != ""
-    except Exception:  # pragma: no cover
-        return False
+    with gmsh_file(Path(source)) as gmsh:
+        return _extract(gmsh, body_names, f"mesh file '{source}'")
 
 
 # --------------------------------------------------------------------------- the deck

@@ -14,6 +14,8 @@ every rank raises the same :class:`MeshError`.
 """
 from __future__ import annotations
 
+import contextlib
+
 import os
 import uuid
 from dataclasses import dataclass, field
@@ -317,7 +319,14 @@ def _gmsh_initialized(gmsh) -> bool:
         return False
 
 
-def _read_file(path: Path, body_names: Sequence[str]) -> _Plan:
+@contextlib.contextmanager
+def gmsh_file(path: Path):
+    """The gmsh module with ``path`` merged into a fresh model, for the ``with`` block.
+
+    Initialises gmsh if needed (finalising it afterwards), and otherwise restores the
+    caller's current model and terminal setting.  Raises MeshError when the file is
+    missing or cannot be read.
+    """
     import gmsh
 
     where = f"mesh file '{path}'"
@@ -326,12 +335,11 @@ def _read_file(path: Path, body_names: Sequence[str]) -> _Plan:
     own = not _gmsh_initialized(gmsh)
     if own:
         gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
         previous, terminal = None, None
     else:
         previous = gmsh.model.getCurrent()
         terminal = gmsh.option.getNumber("General.Terminal")
-        gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.option.setNumber("General.Terminal", 0)
     name = f"dolfinx_friction_{uuid.uuid4().hex}"
     try:
         gmsh.model.add(name)
@@ -339,7 +347,7 @@ def _read_file(path: Path, body_names: Sequence[str]) -> _Plan:
             gmsh.merge(str(path))
         except Exception as e:
             raise MeshError(f"{where} cannot be read: {e}") from None
-        return _extract(gmsh, body_names, where)
+        yield gmsh
     finally:
         try:
             gmsh.model.setCurrent(name)
@@ -352,6 +360,11 @@ def _read_file(path: Path, body_names: Sequence[str]) -> _Plan:
             gmsh.option.setNumber("General.Terminal", terminal)
             if previous is not None and previous in gmsh.model.list():
                 gmsh.model.setCurrent(previous)
+
+
+def _read_file(path: Path, body_names: Sequence[str]) -> _Plan:
+    with gmsh_file(path) as gmsh:
+        return _extract(gmsh, body_names, f"mesh file '{path}'")
 
 
 def _read_live(gmsh, body_names: Sequence[str]) -> _Plan:
