@@ -21,6 +21,7 @@ if str(HERE.parent) not in sys.path:  # run from a checkout without installing
     sys.path.insert(0, str(HERE.parent))
 
 from dolfinx_friction import viz  # noqa: E402  (pyvista before dolfinx)
+from dolfinx_friction.postprocess import contact_state  # noqa: E402,F401  (for the demos)
 from mpi4py import MPI  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -79,22 +80,6 @@ def report(result, seconds: float) -> None:
 def root_print(*args, **kwargs) -> None:
     if MPI.COMM_WORLD.rank == 0:
         print(*args, **kwargs)
-
-
-def contact_state(result, pair: int = 0) -> dict:
-    """Reference coordinates, pressure, normal/tangential forces and status of the slave
-    nodes with an element in pair ``pair``, gathered on every rank (final increment)."""
-    comm = MPI.COMM_WORLD
-    inter = result.problem.interactions[pair]
-    el, r = inter.elements, inter.elements.result
-    s = el.slave
-    area = inter.slaves.area[s]
-    local = dict(X=inter.slaves.X[s], pressure=r.F_N / area, F_N=r.F_N, F_T=r.F_T,
-                 area=area, status=r.status, g_N=r.g_N)
-    parts = comm.allgather(local)
-    out = {k: np.concatenate([p[k] for p in parts]) for k in local}
-    out["X_all"] = np.concatenate(comm.allgather(inter.slaves.X))  # every slave node
-    return out
 
 
 def relerr(got: float, want: float) -> str:
