@@ -12,7 +12,9 @@ Outputs: ``figures/map_<sweep>.png`` (2D maps: one panel per method, cells colou
 outcome and annotated with iterations), ``figures/sweep_<sweep>.png`` (1D sweeps:
 Newton iterations and accuracy against the parameter), ``RESULTS.md`` (tables, machine,
 date) and ``data/<sweep>.json`` (every case with its outcome, reused by ``--plot-only``
-and by later runs unless ``--rerun``).
+and by later runs unless ``--rerun``).  ``--quick`` writes ``figures/quick/`` and
+``RESULTS-quick.md`` instead, so that it never overwrites the full results; its cases are
+a subset of the full run's, so after a full run it only redraws (``--rerun`` to time it).
 """
 from __future__ import annotations
 
@@ -273,24 +275,39 @@ OUTCOMES = {  # display order, colour, legend
     "ok": ("#4daf4a", "converged"),
     "cutback": ("#ffd92f", "converged after cutbacks"),
     "lost": ("#984ea3", "accepted with the contact lost (wrong)"),
+    "stalled": ("#ff7f00", "failed: residual stuck at round-off (tolerance)"),
     "failed": ("#e41a1c", "failed (after all cutbacks)"),
     "timeout": ("#999999", "time limit"),
     "error": ("#000000", "error (exception)"),
 }
 
 
+#: a failed run whose last residual is below this stalled at the round-off floor: the
+#: iterate had converged, the stopping test could not see it (see README.md)
+STALL = 1e-7
+
+
+def last_residual(r: dict):
+    import re
+    m = re.search(r"last residual ([0-9.e+-]+)", r.get("message", ""))
+    return float(m.group(1)) if m else None
+
+
 def outcome(r: dict) -> str:
     s = r["status"]
     if s in ("ok", "cutback") and r.get("lost"):
         return "lost"
+    if s == "failed" and (last_residual(r) or 1.0) < STALL:
+        return "stalled"
     return s
 
 
 def cell_text(r: dict, accuracy: str) -> str:
     o = outcome(r)
-    if o in ("failed", "timeout", "error"):
+    if o in ("failed", "stalled", "timeout", "error"):
         t = r.get("t_reached")
-        return "x" if t is None else f"x\nt={t:.2g}"
+        mark = "x" if o != "stalled" else f"x {last_residual(r):.0e}"
+        return mark if t is None else f"{mark}\nt={t:.2g}"
     txt = f"{r['mean_iterations']:.1f}"
     if r.get("cutbacks"):
         txt += f" c{r['cutbacks']}"
@@ -317,6 +334,12 @@ def _plt():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     return plt
+
+
+def _figures(quick: bool) -> Path:
+    d = FIGURES / "quick" if quick else FIGURES
+    d.mkdir(parents=True, exist_ok=True)
+    return d
 
 
 def _legend_handles():
@@ -348,8 +371,8 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
     methods = [m for m in methods if any(r["case"]["method"] == m for r in results)]
     ncol = min(3, len(methods))
     nrow = math.ceil(len(methods) / ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.4 * nrow + 0.9), squeeze=False,
-                             dpi=110)
+    height = 3.0 * nrow + 1.4
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False, dpi=110)
     order = list(OUTCOMES)
     cmap = ListedColormap([OUTCOMES[o][0] for o in order])
     index = {(r["case"]["method"], _key(r["case"][x[0]]), _key(r["case"][y[0]])): r["result"]
@@ -365,6 +388,7 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
                 grid[j, i] = order.index(o)
                 ax.text(i, j, cell_text(r, sweep.accuracy), ha="center", va="center",
                         fontsize=6.5, color="white" if o in ("lost", "failed", "error") else "black")
+        grid = np.ma.masked_invalid(grid)
         ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(order) - 0.5, origin="lower",
                   aspect="auto")
         ax.set_xticks(range(len(x[1])), [_fmt_value(v) for v in x[1]], fontsize=7)
@@ -380,15 +404,16 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
                  fontsize=8.5)
     fig.legend(handles=_legend_handles(), loc="lower center", ncol=len(OUTCOMES), fontsize=7,
                frameon=False)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.90))
-    FIGURES.mkdir(exist_ok=True)
-    path = FIGURES / f"map_{sweep.name}.png"
+    fig.subplots_adjust(left=0.3 / ncol, right=0.99, top=1 - 0.8 / height,
+                        bottom=0.85 / height, wspace=0.28, hspace=0.45)
+    path = _figures(quick) / f"map_{sweep.name}.png"
     fig.savefig(path)
     plt.close(fig)
     return path
 
 
-MARKERS = {"ok": "o", "cutback": "s", "lost": "D", "failed": "X", "timeout": "X", "error": "X"}
+MARKERS = {"ok": "o", "cutback": "s", "lost": "D", "stalled": "P", "failed": "X", "timeout": "X",
+           "error": "X"}
 
 
 def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
@@ -434,8 +459,7 @@ def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
     fig.legend(handles=_legend_handles(), loc="lower center", ncol=len(OUTCOMES), fontsize=7,
                frameon=False)
     fig.tight_layout(rect=(0, 0.07, 1, 0.95))
-    FIGURES.mkdir(exist_ok=True)
-    path = FIGURES / f"sweep_{sweep.name}.png"
+    path = _figures(quick) / f"sweep_{sweep.name}.png"
     fig.savefig(path)
     plt.close(fig)
     return path
@@ -451,9 +475,19 @@ def _machine() -> dict:
                 break
     except OSError:
         pass
+    import subprocess
+    root = HERE.parent.parent
+    try:
+        commit = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
+                                capture_output=True, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain",
+                                "dolfinx_friction"], capture_output=True, text=True).stdout.strip()
+        commit += " + local changes to dolfinx_friction/" if dirty else ""
+    except OSError:
+        commit = "unknown"
     return dict(nproc=os.cpu_count(), cpu=cpu, python=platform.python_version(),
                 date=datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
-                load=round(os.getloadavg()[0], 1))
+                load=round(os.getloadavg()[0], 1), commit=commit)
 
 
 def table(sweep: Sweep, results: list[dict], quick: bool) -> str:
@@ -466,11 +500,12 @@ def table(sweep: Sweep, results: list[dict], quick: bool) -> str:
         if r is None:
             return ""
         o = outcome(r)
-        if o in ("failed", "timeout", "error"):
+        if o in ("failed", "stalled", "timeout", "error"):
             t = r.get("t_reached")
-            return f"**{o.upper()}**" + (f" (t={t:.3g})" if t is not None else "")
+            name = "FAILED" if o != "stalled" else f"STALLED {last_residual(r):.0e}"
+            return f"**{name}**" + (f" (t={t:.3g})" if t is not None else "")
         txt = cell_text(r, sweep.accuracy).replace("\n", " ")
-        return ("LOST " if o == "lost" else "") + txt
+        return ("**LOST** " + txt[:-len(" lost")]) if o == "lost" else txt
 
     lines = []
     if y is None:
@@ -498,6 +533,10 @@ def counts(results: list[dict]) -> str:
     return ", ".join(f"{n} {o}" for o, n in sorted(c.items(), key=lambda t: list(OUTCOMES).index(t[0])))
 
 
+def _results(quick: bool) -> Path:
+    return RESULTS.with_name("RESULTS-quick.md") if quick else RESULTS
+
+
 def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figures) -> None:
     mode = "--quick" if quick else "full"
     parts = [
@@ -510,13 +549,18 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
         f"* machine: {machine['nproc']} cores (nproc), CPU `{machine['cpu']}`, Python "
         f"{machine['python']}; 1-min load average {machine['load']} at the start (the machine "
         f"is shared with other jobs, so wall times are indicative only)",
+        f"* package: git commit {machine.get('commit', 'unknown')} (the maps describe the "
+        f"solver as of that commit)",
         "* what the findings mean, and where each method stops working: `README.md`",
         "",
         "Cell legend: `4.2 c3` = converged with 4.2 Newton iterations per converged increment on "
         "average and 3 cutbacks in the whole run; the second number is the accuracy measure "
         "named above each table; `*` = the run printed the penetration warning (overclosure "
         "> 5 % of the slave spacing); **FAILED (t=...)** = an increment failed after all "
-        "cutbacks (5, halving), `t` = the load-step time reached; LOST = the solver accepted "
+        "cutbacks (5, halving), `t` = the load-step time reached; **STALLED 1e-10 (t=...)** = "
+        "failed the same way, but the last residual (here 1e-10) sits at the round-off floor: "
+        "the iterate had converged and the stopping test could not see it; LOST = the solver "
+        "accepted "
         "an increment in which the contact carrying the load had vanished (no slave node "
         "in contact, or the normal force below 10 % of its value after the press): the run "
         "reports converged but the answer is wrong.",
@@ -524,8 +568,9 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
         "Case defaults (see `_scenes.py`): Newton tolerance 1e-9 relative, at most 30 "
         "iterations, at most 5 cutbacks; K and the stick slope are given as multiples of "
         "E_slave / h_slave (the package default K = 50 E is 6.25 E/h for the 2D block, "
-        "h = 1/8; 10 E/h for the Hertz mesh, h = 0.2; 25 E/h for the ironing block, h = 0.5); "
-        "default stick slope E/2; mu = 0.3 (Hertz: 0).",
+        "h = 1/8; 10 E/h for the Hertz mesh, h = 0.2; 25 E/h for the ironing block, h = 0.5; "
+        "333 E/h for the coarse 3D block, h = 20/3); default stick slope E/2; mu = 0.3 (Hertz, "
+        "groove: 0).",
         "",
     ]
     for s in sweeps:
@@ -535,11 +580,12 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
         fig = figures.get(s.name)
         parts += [f"## {s.title}", "",
                   f"`{s.name}`: {len(rs)} runs ({counts(rs)}). Accuracy: "
-                  f"{ACCURACY[s.accuracy][0]}. Figure: `figures/{fig.name}`" if fig else "", ""]
+                  f"{ACCURACY[s.accuracy][0]}. Figure: "
+                  f"`{fig.relative_to(HERE)}`" if fig else "", ""]
         if s.note:
             parts += [s.note, ""]
         parts += [table(s, rs, quick), ""]
-    RESULTS.write_text("\n".join(parts) + "\n")
+    _results(quick).write_text("\n".join(parts) + "\n")
 
 
 # ----------------------------------------------------------------------------- main
@@ -567,6 +613,11 @@ def main(argv=None) -> None:
     else:
         results = run_sweeps(sweeps, args.quick, max(1, min(args.workers, 2)), args.rerun)
     wall = time.perf_counter() - t0
+    meta = DATA / f"_run{'_quick' if args.quick else ''}.json"
+    if args.plot_only and meta.exists():
+        machine, wall = json.loads(meta.read_text())
+    elif not args.only and not args.plot_only:
+        meta.write_text(json.dumps([machine, wall]))
     figures = {}
     for s in sweeps:
         rs = [dict(case=r["case"], result=dict(r["result"])) for r in results.get(s.name, [])]
@@ -576,9 +627,9 @@ def main(argv=None) -> None:
         results[s.name] = rs
         figures[s.name] = plot_map(s, rs, args.quick) if s.y else plot_sweep(s, rs, args.quick)
         print(f"figure: {figures[s.name].relative_to(HERE.parent.parent)}  ({counts(rs)})")
-    if not args.only and not args.plot_only:
+    if not args.only:
         write_results(sweeps, results, args.quick, machine, wall, figures)
-        print(f"written: {RESULTS.relative_to(HERE.parent.parent)} ({wall:.0f} s)")
+        print(f"written: {_results(args.quick).relative_to(HERE.parent.parent)} ({wall:.0f} s)")
 
 
 if __name__ == "__main__":

@@ -1,0 +1,47 @@
+"""Reproducer: Newton 'fails' on iterates that have converged to round-off.
+
+The stopping test is ``|R| <= max(rtol * |R_0|, atol)`` with ``R_0`` the first residual of
+the increment, rtol = 1e-9 and an absolute atol = 1e-10.  When the increment changes
+little (a soft penalty; small increments; and every cutback makes ``R_0`` smaller still)
+``rtol * R_0`` falls below the round-off floor of the residual, about
+1e-16 x cond x |internal forces|, and so does ``atol`` whenever the forces are large
+(E = 210000 here).  The residual then stagnates at the floor for 30 iterations, the
+increment is cut back (smaller ``R_0``: worse) and the run stops with ConvergenceError.
+
+The 3D sliding block demo (coarse: 3 x 3 block faces on 6 x 3 foundation faces) with a
+soft penalty K = 0.01 E/h (315) and 10 slide increments: the residual drops from 0.18
+to 3.6e-9 in one iteration and stays at 1e-9..3e-9; required: 1.8e-10.  The maps show
+the same stall for the ironing demo at K >= 1e3 E/h (last residual 1.1e-10 against
+atol 1e-10; whether a given increment passes is decided by round-off) and for the Hertz
+cylinder at K = 1e4 E/h.
+
+    PYTHONPATH=. python benchmarks/stability/reproducers/tolerance_floor.py
+"""
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+import _scenes  # noqa: E402
+from dolfinx_friction.problem import ContactProblem  # noqa: E402
+from dolfinx_friction.solver import ConvergenceError, Solver  # noqa: E402
+
+scene, _ = _scenes.block3d_scene({"k": 0.01, "increments": 10})
+problem = ContactProblem(scene)
+solver = Solver(problem)
+newton = solver._newton
+
+
+def traced(step, loading, tau):
+    ok, its, residuals = newton(step, loading, tau)
+    print(f"t = {tau:.4f} converged = {ok}: residuals {' '.join(f'{r:.1e}' for r in residuals[:6])}"
+          f"{' ...' if len(residuals) > 6 else ''} (needed {max(step.newton_rtol * residuals[0], step.newton_atol):.1e})")
+    return ok, its, residuals
+
+
+solver._newton = traced
+try:
+    solver.run()
+except ConvergenceError as exc:
+    print("ConvergenceError:", exc)
