@@ -68,6 +68,8 @@ def scene(n: int, contact: bool = True, slide_increments: int = 2):
 
 
 def worker(args: list[str]) -> None:
+    if args[0] == "factor":
+        return B.emit(factor_stats(int(args[1]), args[2] == "1"))
     n, contact, reuse, solver = int(args[0]), args[1] == "1", args[2] == "1", args[3]
     profile = len(args) > 4 and args[4] == "profile"
     kwargs = {"reuse_factorisation": reuse}
@@ -82,6 +84,34 @@ def worker(args: list[str]) -> None:
     num.update(n=n, contact=contact, reuse=reuse, solver=solver,
                reactions=[inc.reactions["block_top"].tolist() for inc in result.increments])
     B.emit(num)
+
+
+def factor_stats(n: int, contact: bool) -> dict:
+    """Matrix and MUMPS factor sizes after the press increment (one process per call)."""
+    result, num = B.timed_run(scene(n, contact), max_increments=1)
+    s = result.solver
+    F = s.linear.ksp.getPC().getFactorMatrix()
+    return {"n": n, "contact": contact, "dofs": num["dofs"],
+            "nnz": int(s._J.getInfo()["nz_used"]), "factor_entries": int(F.getMumpsInfog(20)),
+            "flops": float(F.getMumpsRinfog(3)), "ordering": int(F.getMumpsInfog(7)),
+            "solve_per_it": num["phases"]["linear_solve"] / max(num["newton"], 1)}
+
+
+def factor_table(stats: list[dict]) -> str:
+    rows = []
+    for n in sorted({s["n"] for s in stats}):
+        c = next(s for s in stats if s["n"] == n and s["contact"])
+        o = next(s for s in stats if s["n"] == n and not s["contact"])
+        rows.append([f"{c['dofs']:,}", f"{o['nnz']:,} -> {c['nnz']:,} ({c['nnz'] / o['nnz']:.2f}x)",
+                     f"{o['factor_entries']:,} -> {c['factor_entries']:,} "
+                     f"({c['factor_entries'] / o['factor_entries']:.2f}x)",
+                     f"{o['flops']:.3g} -> {c['flops']:.3g} ({c['flops'] / o['flops']:.2f}x)",
+                     f"{c['solve_per_it'] / o['solve_per_it']:.2f}x"])
+    return ("Why the solve costs more with contact (MUMPS, after the press increment; ordering "
+            f"INFOG(7) = {stats[0]['ordering']}, i.e. PORD: this MUMPS has no METIS/SCOTCH):\n\n"
+            + B.table(["dofs", "matrix non-zeros: no contact -> contact",
+                       "factor entries INFOG(20)", "factorisation flops RINFOG(3)",
+                       "solve time ratio"], rows))
 
 
 def per_iteration(r: dict) -> dict:
@@ -240,12 +270,33 @@ def main(argv=None) -> None:
     ap.add_argument("--iterative-sizes")
     ap.add_argument("--no-results", action="store_true")
     ap.add_argument("--json", help="also write all rows to this file")
+    ap.add_argument("--factor-stats", help="sizes n (comma separated) at which to measure the "
+                                           "matrix and factor size with and without contact "
+                                           "(default: the MUMPS sizes up to 12; '' for none)")
+    ap.add_argument("--from-json", help="no runs: report the rows of this --json file "
+                                        "(and its profile, if the run got that far)")
     ap.add_argument("--profile", type=int, metavar="N",
                     help="also profile (cProfile) the contact run at resolution N (default: the "
                          "largest MUMPS size up to 12; 0: no profile)")
     args = ap.parse_args(argv)
     if args.worker:
         return worker(args.worker)
+    if args.from_json:
+        data = json.loads(Path(args.from_json).read_text())
+        if isinstance(data, list):
+            data = {"rows": data}
+        rows, prof, machine = data["rows"], data.get("profile"), data.get("machine", B.machine())
+        figure = chart(rows, machine)
+        text = report(rows, machine, data.get("load_end", B.load_average()), False, figure)
+        if data.get("factor_stats"):
+            text += "\n\n" + factor_table(data["factor_stats"])
+        if prof:
+            text += "\n\n" + B.profile_table(prof["profile"], prof["label"])
+        print(text)
+        if not args.no_results:
+            B.write_section("Cost per Newton iteration and contact overhead (3D, frictional)",
+                            text)
+        return
     ints = lambda s, d: tuple(int(x) for x in s.split(",") if x) if s is not None else d  # noqa
     sizes = ints(args.sizes, QUICK_SIZES if args.quick else FULL_SIZES)
     reuse = ints(args.reuse_sizes, QUICK_REUSE if args.quick else FULL_REUSE)
@@ -282,6 +333,9 @@ def main(argv=None) -> None:
         rows.append(row)
         if args.json:
             Path(args.json).write_text(json.dumps(rows, indent=1))
+    fsizes = ints(args.factor_stats, tuple(n for n in sizes if n <= 12))
+    fstats = [B.run_worker(Path(__file__), ["factor", str(n), str(int(c))])
+              for n in fsizes for c in (True, False)]
     prof_n = args.profile if args.profile is not None else (0 if args.quick else max(
         [n for n in sizes if n <= 12], default=0))
     prof = None
@@ -291,10 +345,17 @@ def main(argv=None) -> None:
     figure = chart(rows, machine)
     print(f"chart: {figure}")
     text = report(rows, machine, B.load_average(), args.quick, figure)
+    if fstats:
+        text += "\n\n" + factor_table(fstats)
+        print(factor_table(fstats))
     if prof:
-        text += ("\n\n" + B.profile_table(
-            prof["profile"], f"Profile of the contact run at n = {prof_n} ({prof['dofs']:,} "
-                             f"dofs, {prof['newton']} Newton iterations), "))
+        prof["label"] = (f"Profile of the contact run at n = {prof_n} ({prof['dofs']:,} dofs, "
+                         f"{prof['newton']} Newton iterations), ")
+        text += "\n\n" + B.profile_table(prof["profile"], prof["label"])
+    if args.json:
+        Path(args.json).write_text(json.dumps({"rows": rows, "profile": prof, "machine": machine,
+                                               "load_end": B.load_average(),
+                                               "factor_stats": fstats}, indent=1))
     print(text)
     if not args.no_results:
         B.write_section("Cost per Newton iteration and contact overhead (3D, frictional)", text)

@@ -182,7 +182,11 @@ def measure(result, problem: str) -> dict:
 
 
 def run_series(problem: str, degrees: dict, ks, log, rows: list, save=lambda: None) -> list:
+    done = {(r["degree"], r["n"], r["k"]) for r in rows if r.get("ok")}
+    rows[:] = [r for r in rows if r.get("ok")]  # --resume: failed points are retried
     for degree, ns in degrees.items():
+        if all((degree, n, k) in done for n in ns for k in ks):
+            continue
         # warm-up (untimed): form compilation / cache loading of this problem and degree
         B.timed_run(scene(problem, ns[0], degree, ks[0]))
         for n in ns:
@@ -190,6 +194,8 @@ def run_series(problem: str, degrees: dict, ks, log, rows: list, save=lambda: No
             (mesh_2d if problem == "2d" else mesh_3d)(n)
             t_mesh = time.perf_counter() - t0
             for k in ks:
+                if (degree, n, k) in done:
+                    continue
                 row = {"problem": problem, "degree": degree, "n": n, "h": A_NOMINAL / n,
                        "k": k, "mesh_s": t_mesh}
                 try:
@@ -372,6 +378,8 @@ def main(argv=None) -> None:
     ap.add_argument("--no-results", action="store_true", help="do not touch RESULTS.md")
     ap.add_argument("--json", help="write the measured rows (and machine) to this file")
     ap.add_argument("--from-json", help="no runs: report and chart the rows of this file")
+    ap.add_argument("--resume", help="keep the rows of this --json file, run only the missing "
+                                     "points (the machine description is the new run's)")
     args = ap.parse_args(argv)
     if args.from_json:
         data = json.loads(Path(args.from_json).read_text())
@@ -404,9 +412,12 @@ def main(argv=None) -> None:
                 {"machine": machine, "rows": all_rows, "load_end": B.load_average(),
                  "quick": args.quick}, indent=1))
 
+    if args.resume:
+        all_rows.update(json.loads(Path(args.resume).read_text())["rows"])
     for problem in args.problems.split(","):
-        all_rows[problem] = []
+        all_rows.setdefault(problem, [])
         run_series(problem, plan[problem], ks, log, all_rows[problem], save)
+        all_rows[problem].sort(key=lambda r: (r["degree"], r["n"], r["k"]))
         figures.append(chart(all_rows[problem], problem, _title(problem, machine)))
         print(f"chart: {figures[-1]}")
     save()
