@@ -156,6 +156,7 @@ def main(argv=None) -> None:
     ap.add_argument("--profile", action="store_true",
                     help="run the largest rank count once more under cProfile (every rank) and "
                          "add the profiles to the report")
+    ap.add_argument("--profile-n", type=int, help="resolution of the profiled run (default: n)")
     args = ap.parse_args(argv)
     if args.worker:
         return worker(args.worker)
@@ -180,12 +181,16 @@ def main(argv=None) -> None:
     figure = chart(runs, machine, n)
     text = report(runs, machine, B.load_average(), args.quick, figure, n, args.slide)
     if args.profile:
-        r = max(runs)
-        prof = B.run_worker(Path(__file__), [str(n), str(args.slide), "profile"], ranks=r,
+        r, pn = max(runs), args.profile_n or n
+        pmesh = B.work_dir("boxes") / f"two_boxes_n{pn}.msh"
+        if not pmesh.exists():
+            M.two_boxes(pmesh, pn)
+        prof = B.run_worker(Path(__file__), [str(pn), str(args.slide), "profile"], ranks=r,
                             timeout=6 * 3600)
         for k, rows in enumerate(prof["profile_per_rank"]):
-            t = B.profile_table(rows, f"Profile, {r} ranks, rank {k} (wall {prof['wall']:.0f} s, "
-                                      f"load {prof['load'][0]:.1f}), ")
+            t = B.profile_table(rows, f"Profile, n = {pn} ({prof['dofs']:,} dofs), {r} ranks, "
+                                      f"rank {k} (wall {prof['wall']:.0f} s, load "
+                                      f"{prof['load'][0]:.1f}), ")
             print(t)
             text += "\n\n" + t
     print(text)

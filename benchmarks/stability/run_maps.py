@@ -386,8 +386,9 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
                     continue
                 o = outcome(r)
                 grid[j, i] = order.index(o)
+                dark = o in ("lost", "failed", "error")
                 ax.text(i, j, cell_text(r, sweep.accuracy), ha="center", va="center",
-                        fontsize=6.5, color="white" if o in ("lost", "failed", "error") else "black")
+                        fontsize=6.5, color="white" if dark else "black")
         grid = np.ma.masked_invalid(grid)
         ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(order) - 0.5, origin="lower",
                   aspect="auto")
@@ -402,10 +403,12 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
     fig.suptitle(f"{sweep.title}\ncell: Newton iterations per increment (mean), cN = N cutbacks"
                  f"\n2nd line: {label}; * = penetration warning; x: failed at load time t",
                  fontsize=8.5)
-    fig.legend(handles=_legend_handles(), loc="lower center", ncol=len(OUTCOMES), fontsize=7,
+    per_row = len(OUTCOMES) if ncol >= 3 else 4
+    fig.legend(handles=_legend_handles(), loc="lower center", ncol=per_row, fontsize=7,
                frameon=False)
+    rows = math.ceil(len(OUTCOMES) / per_row)
     fig.subplots_adjust(left=0.3 / ncol, right=0.99, top=1 - 0.8 / height,
-                        bottom=0.85 / height, wspace=0.28, hspace=0.45)
+                        bottom=(0.7 + 0.18 * rows) / height, wspace=0.28, hspace=0.45)
     path = _figures(quick) / f"map_{sweep.name}.png"
     fig.savefig(path)
     plt.close(fig)
@@ -456,9 +459,9 @@ def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
     a2.set_ylabel(ACCURACY[sweep.accuracy][0], fontsize=8)
     a2.set_title("accuracy where converged", fontsize=9)
     fig.suptitle(sweep.title, fontsize=10)
-    fig.legend(handles=_legend_handles(), loc="lower center", ncol=len(OUTCOMES), fontsize=7,
+    fig.legend(handles=_legend_handles(), loc="lower center", ncol=4, fontsize=7,
                frameon=False)
-    fig.tight_layout(rect=(0, 0.07, 1, 0.95))
+    fig.tight_layout(rect=(0, 0.11, 1, 0.95))
     path = _figures(quick) / f"sweep_{sweep.name}.png"
     fig.savefig(path)
     plt.close(fig)
@@ -530,7 +533,8 @@ def counts(results: list[dict]) -> str:
     for r in results:
         o = outcome(r["result"])
         c[o] = c.get(o, 0) + 1
-    return ", ".join(f"{n} {o}" for o, n in sorted(c.items(), key=lambda t: list(OUTCOMES).index(t[0])))
+    order = list(OUTCOMES)
+    return ", ".join(f"{n} {o}" for o, n in sorted(c.items(), key=lambda t: order.index(t[0])))
 
 
 def _results(quick: bool) -> Path:
@@ -554,10 +558,13 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
         "* what the findings mean, and where each method stops working: `README.md`",
         "",
         "Cell legend: `4.2 c3` = converged with 4.2 Newton iterations per converged increment on "
-        "average and 3 cutbacks in the whole run; the second number is the accuracy measure "
+        "average and 3 cutbacks in the whole run (each cutback is a failed attempt of up to 30 "
+        "iterations; since the solver grows the increment back after an easy one, a size that "
+        "always fails is retried, and N can exceed the 5 levels); the second number is the "
+        "accuracy measure "
         "named above each table; `*` = the run printed the penetration warning (overclosure "
-        "> 5 % of the slave spacing); **FAILED (t=...)** = an increment failed after all "
-        "cutbacks (5, halving), `t` = the load-step time reached; **STALLED 1e-10 (t=...)** = "
+        "> 5 % of the slave spacing); **FAILED (t=...)** = an increment still failed after "
+        "5 successive halvings, `t` = the load-step time reached; **STALLED 1e-10 (t=...)** = "
         "failed the same way, but the last residual (here 1e-10) sits at the round-off floor: "
         "the iterate had converged and the stopping test could not see it; LOST = the solver "
         "accepted "

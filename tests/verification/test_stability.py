@@ -9,6 +9,8 @@
   in every iteration never converges, whatever the increment.
 * A penalty far too soft (K = 0.01 E/h) is flagged by the penetration warning; the
   default is not.
+* Sliding a whole master face per increment keeps the bodies in contact (a regression
+  test for the search bound that the maps exposed).
 * A penalty far too stiff (K = 10^4 E/h) turns a slide increment that converges at
   K = 10 E/h into a failure: cutbacks rescue it, and with too few cutbacks the failure
   is reported (ConvergenceError naming the increment, ``summary.json`` not converged)
@@ -149,6 +151,18 @@ def test_cutback_rescues_stick_slip_transition(shared_dir):
                        steps=(scene.steps[0], Step("slide", increments=n,
                                                    bcs=scene.steps[1].bcs))), write=False)
     np.testing.assert_allclose(direct.increments[-1].reactions["block_top"], R, rtol=1e-8)
+
+
+def test_slide_of_a_whole_face_keeps_contact(shared_dir):
+    """Sliding one master face in one increment must not uncouple the bodies.  (Before the
+    search dropped its distance bound, each slave node had only two candidate faces, lost
+    them all within the increment, and the increment was accepted with no contact and a
+    zero reaction: benchmarks/stability/README.md.)"""
+    mesh = block_on_foundation(shared_dir / "block.msh")
+    result = run(_sliding_block(mesh, 0.125, max_cutbacks=5), write=False)
+    for inc in result.increments:
+        assert inc.active == 9
+        assert -inc.reactions["block_top"][1] > 10.0
 
 
 def _groove_scene(mesh, pairing_iterations: int, max_cutbacks: int = 0,
