@@ -59,15 +59,22 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     increments: list[Increment] = []
     warnings: dict[str, str] = {}
 
+    def warn(key: str, text: str) -> None:
+        if key not in warnings:
+            warnings[key] = text
+            if comm.rank == 0:
+                print(f"dolfinx-friction: warning: {text}", file=sys.stderr)
+
     def record(inc: Increment) -> None:
         increments.append(inc)
         for pair, ratio in inc.penetration.items():
-            if ratio > PENETRATION_WARNING and pair not in warnings:
-                warnings[pair] = (f"contact {pair}: overclosure reaches {ratio:.1%} of the slave "
-                                  f"node spacing at t = {inc.t:.4g}; the penalty K is too soft "
-                                  f"for this mesh")
-                if comm.rank == 0:
-                    print(f"dolfinx-friction: warning: {warnings[pair]}", file=sys.stderr)
+            if ratio > PENETRATION_WARNING:
+                warn(pair, f"contact {pair}: overclosure reaches {ratio:.1%} of the slave node "
+                           f"spacing at t = {inc.t:.4g}; the penalty K is too soft for this mesh")
+        for pair, count in inc.detached.items():
+            if count:
+                warn(pair + " detached", f"contact {pair}: {count} slave node(s) in contact slid "
+                                         f"off the master surface at t = {inc.t:.4g}")
         if writer is not None:
             t0 = time.perf_counter()
             writer.increment(inc)

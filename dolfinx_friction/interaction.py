@@ -75,6 +75,7 @@ class Elements:
     candidate: np.ndarray  # index of each element among the pair's candidates
     xi: Optional[np.ndarray] = None  # last projection point, a start for the next one
     result: Optional[ElementResult] = None
+    roundoff: Optional[np.ndarray] = None  # (n, nodes * gdim) round-off scale of the forces
 
 
 #: Parametric distance by which a slave node may pass its current face's edge and keep
@@ -97,6 +98,10 @@ class ContactInteraction:
         n = len(slaves.nodes)
         self.history = FrictionState.zeros(n, gdim)
         self.in_contact = np.zeros(n, dtype=bool)  # had an element at the last commit
+        self.closed = np.zeros(n, dtype=bool)  # closed (not open) at the last commit
+        self.lost = np.zeros(n, dtype=bool)  # lost its element at the last pairing
+        self.off_surface = np.zeros(n, dtype=bool)  # lost even after a fresh search
+        self._gap_offset = np.zeros(0)  # ramp offset of the current elements' clearances
         self.cutoff = params.law.cutoff(slaves.area)
         self.initial_gap = np.zeros(n)  # negative clearances found at the first pairing (§3.4)
         self._first_pairing = True
@@ -136,18 +141,23 @@ class ContactInteraction:
         self._faces = (nodes, X)
         self._face_ids = np.concatenate([f[2] for f in incoming])
 
-    def search(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray]) -> None:
-        """Candidate masters of every slave node, once per increment (collective).
+    def search(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray],
+               update_areas: bool = True) -> None:
+        """Candidate masters of every slave node (collective).
 
-        Updates the slave areas on the deformed faces, receives the master faces
-        near this rank's slave nodes and keeps, for each slave node, the faces
-        with the nearest centroids: pairing within the increment chooses among
-        them, so the matrix pattern of the contact couplings stays fixed.
+        Called once per increment, and again within it only when a slave node
+        slides past all its candidates (:meth:`needs_search`).  Updates the slave
+        areas on the deformed faces (unless ``update_areas`` is false), receives
+        the master faces near this rank's slave nodes and keeps, for each slave
+        node, the faces with the nearest centroids: pairing chooses among them,
+        so the matrix pattern of the contact couplings changes only with a search.
         """
         if self._slave_gather is None:
             self._slave_gather = NodeValues(u, self.slaves.nodes, self.gdim)
-        self.slaves.update_areas()
-        self.cutoff = self.params.law.cutoff(self.slaves.area)
+        self.off_surface[:] = False
+        if update_areas:
+            self.slaves.update_areas()
+            self.cutoff = self.params.law.cutoff(self.slaves.area)
         n = len(self.slaves.nodes)
         if self.rigid:
             if self._gather is None:
@@ -168,14 +178,17 @@ class ContactInteraction:
         """Pair every slave node with one of its candidate masters within the cutoff.
 
         A slave node takes the nearest face onto which it projects orthogonally.
-        Within an increment (``iteration > 0``) pairing has hysteresis: an element
-        is kept while its node still projects onto the same face (up to
-        :data:`FACE_SLACK` past its edges), even above the cutoff; elements are
-        dropped only at the first pairing of the next increment.
+        Pairing has hysteresis: a node closed at the last commit (at the first
+        pairing of an increment), or with an element (later in the increment),
+        keeps an element even above the cutoff, and keeps its face while it
+        still projects onto it (up to :data:`FACE_SLACK` past its edges).  So
+        elements are dropped only at the first pairing of an increment, and only
+        from nodes that were open, however far a predictor has moved them.
+        Nodes that keep no element although they should are marked in :attr:`lost`.
         """
         cands = self.candidates
         u_s = self._slave_gather(u)
-        had = np.zeros(len(self.slaves.nodes), dtype=bool)
+        had = self.closed.copy()
         if iteration > 0:
             had[self.elements.slave] = True
         if self.rigid:
@@ -203,6 +216,18 @@ class ContactInteraction:
         order = ok[np.lexsort((self._face_ids[cand[ok]], np.abs(g_N[ok]), rank[ok], slave[ok]))]
         chosen = order[np.unique(slave[order], return_index=True)[1]]
         self._set_elements(chosen, proj.xi[chosen])
+        self.lost = had.copy()
+        self.lost[self.elements.slave] = False
+
+    def needs_search(self) -> bool:
+        """Whether a node lost its element since the last search (then it may have slid
+        past all its candidate faces: a new search finds its face, or marks it
+        :attr:`off_surface`).  Local: the caller reduces over ranks."""
+        return bool((self.lost & ~self.off_surface).any())
+
+    def mark_off_surface(self) -> None:
+        """After a search and pairing: nodes still lost have left the master surface."""
+        self.off_surface |= self.lost
 
     def _set_elements(self, chosen: np.ndarray, xi: np.ndarray) -> None:
         """Make the chosen candidates (projected at ``xi``) the current elements."""
@@ -234,7 +259,8 @@ class ContactInteraction:
         el = self.elements
         s = el.slave
         every = np.arange(len(s))
-        kin = self._kinematics(el, every, self._slave_gather(u), self._gather(u), el.xi)
+        u_slaves = self._slave_gather(u)
+        kin = self._kinematics(el, every, u_slaves, self._gather(u), el.xi)
         el.xi = kin.xi
         history = None
         if self.params.mu > 0.0:
@@ -244,9 +270,15 @@ class ContactInteraction:
             history.w[new] = self._kinematics(el, new, u_s, u_m, el.xi[new]).w
             history.g_T[new] = 0.0
             history.g_p[new] = 0.0
+        self._gap_offset = -ramp * self.initial_gap[s]
         el.result = evaluate(kin, self.slaves.area[s], self.params, history,
-                             gap_offset=-ramp * self.initial_gap[s])
+                             gap_offset=self._gap_offset)
         self._trial = el.result.trial
+        # the clearance is a difference of coordinates: its round-off, times the tangent
+        size = np.abs(self.slaves.X[s] + u_slaves[s]).max(axis=1, initial=0.0)
+        nd = el.nodes.shape[1] * self.gdim
+        el.roundoff = (np.abs(el.result.K.reshape(-1, nd, nd)).sum(axis=2) * size[:, None]
+                       + np.abs(el.result.f.reshape(-1, nd)))
         return el
 
     def _kinematics(self, el: Elements, rows: np.ndarray, u_slaves: np.ndarray,
@@ -267,16 +299,19 @@ class ContactInteraction:
         s = self.elements.slave
         self.in_contact[:] = False
         self.in_contact[s] = True
+        self.closed[:] = False
+        if self.elements.result is not None:
+            self.closed[s] = self.elements.result.status != OPEN
         if self._trial is not None:
             fresh = FrictionState.zeros(len(self.in_contact), self.gdim)
             fresh.put(s, self._trial)
             self.history = fresh
 
     def save(self) -> tuple:
-        return self.history.copy(), self.in_contact.copy()
+        return self.history.copy(), self.in_contact.copy(), self.closed.copy()
 
     def restore(self, saved: tuple) -> None:
-        self.history, self.in_contact = saved[0].copy(), saved[1].copy()
+        self.history, self.in_contact, self.closed = (a.copy() for a in saved)
 
     def counts(self) -> tuple[int, int]:
         """Slave nodes in contact (closed) and in slip, on this rank."""
@@ -287,11 +322,19 @@ class ContactInteraction:
         return int(closed.sum()), int((closed & (r.status == SLIP)).sum())
 
     def penetration(self) -> float:
-        """Largest overclosure on this rank relative to the slave node's spacing."""
+        """Largest overclosure the law acts on (the clearance plus the ramp offset of an
+        initial overclosure, §3.4), on this rank, relative to the slave node's spacing."""
         r = self.elements.result
         if r is None or len(r.g_N) == 0:
             return 0.0
-        return float(np.max(-r.g_N / self.slaves.spacing[self.elements.slave]))
+        return float(np.max(-(r.g_N + self._gap_offset) / self.slaves.spacing[self.elements.slave]))
+
+    def detached(self) -> int:
+        """Nodes on this rank that were closed at the last commit and now have no element:
+        they slid off the master surface (meaningful after convergence, before commit)."""
+        kept = np.zeros(len(self.closed), dtype=bool)
+        kept[self.elements.slave] = True
+        return int((self.closed & ~kept).sum())
 
 
 def _face_size(x_faces: np.ndarray) -> np.ndarray:

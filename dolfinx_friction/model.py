@@ -119,7 +119,7 @@ class Step:
     newton_rtol: float = 1e-9
     newton_atol: float = 1e-10
     max_iterations: int = 30
-    line_search: bool = False
+    line_search: bool = True
     bcs: tuple[BC, ...] = ()
     loads: tuple[Load, ...] = ()
     rigid: tuple[RigidMotion, ...] = ()

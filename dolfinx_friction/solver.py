@@ -20,6 +20,10 @@ from dolfinx_friction.assembly import CooPattern
 from dolfinx_friction.linear import LinearSolver
 from dolfinx_friction.problem import ContactProblem, ModelError, Timers
 
+#: The residual is converged once it is below this many round-off units of the terms it
+#: sums (|K| |u| + |f_ext| + the contact forces' sensitivity to the coordinates): Newton
+#: cannot reduce it further, whatever the tolerances ask.
+ROUNDOFF_FLOOR = 2 * np.finfo(float).eps
 
 
 class ConvergenceError(RuntimeError):
@@ -44,6 +48,7 @@ class Increment:
     rigid_u: dict[str, np.ndarray]
     rigid_f: dict[str, np.ndarray]
     penetration: dict[str, float]  # largest overclosure / slave spacing, per contact pair
+    detached: dict[str, int]  # nodes in contact before that slid off the master surface
 
 
 @dataclass
@@ -74,6 +79,32 @@ class _Loading:
                 self.f_start + tau * (self.f_end - self.f_start))
 
 
+class _IncrementSize:
+    """Increment size of a step: halved when an increment fails; doubled back after
+    ``needed`` easy increments (at most 4 Newton iterations) in a row.  A size that fails
+    again right after growing back doubles ``needed``, so a size that keeps failing is
+    retried ever more rarely instead of after every easy increment."""
+
+    def __init__(self, increments: int):
+        self.increments, self.level, self.easy, self.needed = increments, 0, 0, 1
+        self._just_grew = False
+
+    @property
+    def current(self) -> float:
+        return 1.0 / (self.increments * 2 ** self.level)
+
+    def failed(self) -> None:
+        if self._just_grew:
+            self.needed *= 2
+        self.level, self.easy, self._just_grew = self.level + 1, 0, False
+
+    def converged(self, iterations: int) -> None:
+        self.easy = self.easy + 1 if iterations <= 4 else 0
+        self._just_grew = bool(self.level and self.easy >= self.needed)
+        if self._just_grew:
+            self.level, self.easy = self.level - 1, 0
+
+
 class Solver:
     """Drives a :class:`ContactProblem` through the steps of its scene."""
 
@@ -86,6 +117,9 @@ class Solver:
         self.linear = LinearSolver(p.comm, options_prefix, reuse_factorisation, petsc_options)
         self.u_n = p.u.duplicate()
         self.R = p.u.duplicate()
+        self.S = p.u.duplicate()  # round-off scale of the residual's rows
+        self._abs_u = p.u.duplicate()
+        self._K_abs = _absolute(p.K_bulk)
         self.du = p.u.duplicate()
         self.f_ext = np.zeros(p.layout.n_owned * self.gdim)
         self._pattern: Optional[CooPattern] = None
@@ -196,10 +230,10 @@ class Solver:
         start = time.perf_counter()
         for index, step in enumerate(self.problem.scene.steps):
             loading = self._step_loading(index)
-            tau, level, number = 0.0, 0, 0
+            tau, number, size = 0.0, 0, _IncrementSize(step.increments)
             rate = None  # du/dtau of the step's last increment: the next one's predictor
             while tau < 1.0 - 1e-12:
-                dtau = min(1.0 / (step.increments * 2 ** level), 1.0 - tau)
+                dtau = min(size.current, 1.0 - tau)
                 saved = self._save()
                 if rate is not None:
                     self.problem.u.axpy(dtau, rate)
@@ -207,9 +241,9 @@ class Solver:
                 summary.newton_iterations += iters
                 if not ok:
                     self._restore(saved)
-                    level += 1
+                    size.failed()
                     summary.cutbacks += 1
-                    if level > step.max_cutbacks:
+                    if size.level > step.max_cutbacks:
                         reason = (f"step {index} ({step.name!r}), increment {number + 1} at "
                                   f"t = {index + tau:.6g}: Newton did not converge after "
                                   f"{step.max_cutbacks} cutbacks (last residual "
@@ -220,17 +254,17 @@ class Solver:
                     continue
                 tau += dtau
                 number += 1
-                if level and iters <= 4:  # an easy increment after a cutback: grow back
-                    level -= 1
+                size.converged(iters)
                 rate = rate or self.problem.u.duplicate()
                 rate.waxpy(-1.0, self.u_n, self.problem.u)
                 rate.scale(1.0 / dtau)
+                report = self._report(index, step.name, number, index + tau, iters, residuals,
+                                      time.perf_counter() - start)
                 for inter in self.problem.interactions:
                     inter.commit()
                 summary.increments += 1
                 if on_increment is not None:
-                    on_increment(self._report(index, step.name, number, index + tau, iters,
-                                              residuals, time.perf_counter() - start))
+                    on_increment(report)
         summary.converged = True
         summary.wall = time.perf_counter() - start
         return summary
@@ -259,10 +293,8 @@ class Solver:
             residuals.append(norm)
             if not np.isfinite(norm):
                 return False, it, residuals
-            # the residual cannot fall below round-off of the internal forces: a predictor
-            # that starts close to the solution must not ask for more than that
-            floor = 1e-13 * np.sqrt(self.comm.allreduce(float(self._internal @ self._internal)))
-            if norm <= max(step.newton_rtol * residuals[0], step.newton_atol, floor):
+            target = max(step.newton_rtol * residuals[0], step.newton_atol)
+            if norm <= max(target, self._floor):
                 return True, it, residuals
             if it == step.max_iterations:
                 return False, it, residuals
@@ -273,14 +305,16 @@ class Solver:
                 return False, it + 1, residuals
             p.u.axpy(-1.0, self.du)
             if step.line_search:
-                self._line_search(it, loading.rows, norm)
+                self._line_search(it, loading.rows, norm, target)
         return False, step.max_iterations, residuals
 
-    def _line_search(self, it: int, rows: np.ndarray, norm0: float) -> None:
-        """Backtrack along the Newton step while the residual norm does not decrease."""
+    def _line_search(self, it: int, rows: np.ndarray, norm0: float, target: float) -> None:
+        """Backtrack along the Newton step while the residual norm does not decrease (and
+        is not converged: at round-off it need not decrease)."""
         alpha = 1.0
         for _ in range(5):
-            if self._assemble(it, rows, jacobian=False) <= (1.0 - 1e-4 * alpha) * norm0:
+            norm = self._assemble(it, rows, jacobian=False)
+            if norm <= max((1.0 - 1e-4 * alpha) * norm0, target, self._floor):
                 return
             alpha *= 0.5
             self.problem.u.axpy(alpha, self.du)  # back from u - 2 alpha du to u - alpha du
@@ -293,6 +327,10 @@ class Solver:
         r = self.R.getArray()
         r -= self.f_ext
         self.R.setArray(r)
+        p.u.copy(self._abs_u)
+        self._abs_u.abs()
+        self._K_abs.mult(self._abs_u, self.S)
+        self.S.setArray(self.S.getArray() + np.abs(self.f_ext))
         self.timers.add("bulk_assembly", time.perf_counter() - t0)
         t0 = time.perf_counter()
         if jacobian and it == 0:
@@ -301,30 +339,45 @@ class Solver:
         for k, inter in enumerate(p.interactions):
             if jacobian and it < inter.pairing_iterations:
                 ts = time.perf_counter()
-                if it == 0:
-                    inter.search(p.u, p.master_displacements(k))
-                inter.pair(p.u, it)
+                self._pair(k, inter, it)
                 self.timers.add("contact_search", time.perf_counter() - ts)
             el = inter.evaluate(p.u, self.u_n, self._ramp)
-            dofs = _dofs(el.nodes, d)
-            self.R.setValues(dofs.ravel().astype(PETSc.IntType), el.result.f.ravel(),
-                             addv=PETSc.InsertMode.ADD)
+            dofs = _dofs(el.nodes, d).ravel().astype(PETSc.IntType)
+            self.R.setValues(dofs, el.result.f.ravel(), addv=PETSc.InsertMode.ADD)
+            self.S.setValues(dofs, el.roundoff.ravel(), addv=PETSc.InsertMode.ADD)
             if jacobian:  # tangents into the slots of the pair's candidate elements
-                nd = dofs.shape[1]
+                nd = el.nodes.shape[1] * d
                 block = np.zeros((len(inter.candidates.slave), nd, nd))
                 block[el.candidate] = el.result.K.reshape(-1, nd, nd)
                 vals.append(block.ravel())
         self.R.assemble()
+        self.S.assemble()
         self.timers.add("contact_assembly", time.perf_counter() - t0)
         r = self.R.getArray()
         self._internal = r + self.f_ext  # for reactions and rigid forces
         r[bc_rows] = 0.0
         self.R.setArray(r)
+        scale = self.S.getArray(readonly=True).copy()
+        scale[bc_rows] = 0.0
+        self._floor = ROUNDOFF_FLOOR * np.sqrt(self.comm.allreduce(float(scale @ scale)))
         if jacobian:
             t0 = time.perf_counter()
             self._fill_jacobian(vals, bc_rows)
             self.timers.add("contact_assembly", time.perf_counter() - t0)
         return self.R.norm()
+
+    def _pair(self, k: int, inter, it: int) -> None:
+        """Search (first iteration) and pair; search again (collective) if a slave node
+        slid past all its candidate faces."""
+        p = self.problem
+        if it == 0:
+            inter.search(p.u, p.master_displacements(k))
+        inter.pair(p.u, it)
+        if it > 0 and self.comm.allreduce(int(inter.needs_search())):
+            p.update_fields()
+            inter.search(p.u, p.master_displacements(k), update_areas=False)
+            inter.pair(p.u, it)
+        inter.mark_off_surface()
 
     def _fill_jacobian(self, vals: list, bc_rows: np.ndarray) -> None:
         """Bulk stiffness + contact tangents; the pattern holds all candidate couplings and is
@@ -375,5 +428,15 @@ class Solver:
         active, slipping = (int(c) for c in comm.allreduce(np.asarray(counts)))
         penetration = {i.name: comm.allreduce(i.penetration(), op=MPI.MAX)
                        for i in p.interactions}
+        detached = {i.name: comm.allreduce(i.detached()) for i in p.interactions}
         return Increment(index, name, number, t, iters, residuals[-1], residuals, active,
-                         slipping, wall, reactions, rigid_u, rigid_f, penetration)
+                         slipping, wall, reactions, rigid_u, rigid_f, penetration, detached)
+
+
+def _absolute(A: PETSc.Mat) -> PETSc.Mat:
+    """A copy of ``A`` with the absolute values of its entries."""
+    B = A.duplicate(copy=True)
+    indptr, indices, values = B.getValuesCSR()
+    B.setValuesCSR(indptr, indices, np.abs(values))
+    B.assemble()
+    return B

@@ -288,7 +288,7 @@ def test_example_parses_with_defaults(tmp_path):
     press, slide = scene.steps
     assert press == Step(
         name="press", increments=1, max_cutbacks=6, newton_rtol=1e-9, newton_atol=1e-10,
-        max_iterations=30, line_search=False,
+        max_iterations=30, line_search=True,
         bcs=(BC("foundation_bottom", (0.0, 0.0, 0.0)), BC("block_top", (0.0, 0.0, -0.001))),
     )
     assert slide == Step(name="slide", increments=10, bcs=(BC("block_top", (0.02, 0.0, -0.001)),))

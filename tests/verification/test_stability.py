@@ -102,10 +102,10 @@ def tip_in_groove(path):
 
 
 # ----------------------------------------------------------------------------- scenes
-def _sliding_block(mesh, slide: float, max_cutbacks: int) -> Scene:
+def _sliding_block(mesh, slide: float, max_cutbacks: int, line_search: bool = False) -> Scene:
     """Press the block 0.01 into the foundation, then slide it by ``slide`` in one
     increment; default penalty (K = 50 E = 6.25 E/h), mu = 0.3."""
-    kw = dict(max_cutbacks=max_cutbacks, max_iterations=10)
+    kw = dict(max_cutbacks=max_cutbacks, max_iterations=10, line_search=line_search)
     return Scene(
         mesh=mesh, bodies=(Body("block", E, NU), Body("foundation", E, NU)),
         contacts=(ContactPair("block_bottom", "foundation_top", mu=0.3),),
@@ -151,6 +151,10 @@ def test_cutback_rescues_stick_slip_transition(shared_dir):
                        steps=(scene.steps[0], Step("slide", increments=n,
                                                    bcs=scene.steps[1].bcs))), write=False)
     np.testing.assert_allclose(direct.increments[-1].reactions["block_top"], R, rtol=1e-8)
+    # the default line search takes the increment in one go
+    searched = run(_sliding_block(mesh, 0.05, max_cutbacks=0, line_search=True), write=False)
+    R = searched.increments[-1].reactions["block_top"]
+    assert searched.summary.cutbacks == 0 and abs(R[0] / R[1]) == pytest.approx(0.3, rel=0.02)
 
 
 def test_slide_of_a_whole_face_keeps_contact(shared_dir):
