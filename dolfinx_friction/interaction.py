@@ -84,6 +84,12 @@ FACE_SLACK = 1e-3
 #: A slave node that projects inside no face (near a convex edge of a faceted master)
 #: takes the nearest face it misses by at most this parametric distance.
 EDGE_SLACK = 0.05
+#: Ties in pairing: a node this close (parametric) to a face's edge projects inside it,
+#: and clearances that differ by less than this times the node spacing are equal; ties
+#: go to the face whose reference centroid (to 1e3 TIE spacings) comes first (x, y, z).  So a node on
+#: an edge shared by two faces picks the same face whatever the partition (round-off and
+#: global face numbers differ between partitions).
+TIE = 1e-9
 
 
 class ContactInteraction:
@@ -209,11 +215,15 @@ class ContactInteraction:
         if iteration > 0:
             previous[self.elements.slave] = self.elements.face_id
         outside = np.where(proj.converged, face.distance_outside(proj.xi), np.inf)
-        # preference: the current face (within FACE_SLACK), an interior projection, a near miss
-        rank = np.where(proj.interior, 1, 2)
+        # preference: the current face (within FACE_SLACK), an interior projection, a near
+        # miss; then the smallest clearance, then the first reference centroid (TIE)
+        rank = np.where(outside <= TIE, 1, 2)
         rank[(self._face_ids[cand] == previous[slave]) & (outside <= FACE_SLACK)] = 0
         ok = np.flatnonzero((outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave]))
-        order = ok[np.lexsort((self._face_ids[cand[ok]], np.abs(g_N[ok]), rank[ok], slave[ok]))]
+        unit = TIE * self.slaves.spacing[slave[ok]]
+        clearance = np.floor(np.abs(g_N[ok]) / unit)
+        centroid = np.round(self._faces[1][cand[ok]].mean(axis=1) / (1e3 * unit[:, None]))
+        order = ok[np.lexsort((*centroid.T[::-1], clearance, rank[ok], slave[ok]))]
         chosen = order[np.unique(slave[order], return_index=True)[1]]
         self._set_elements(chosen, proj.xi[chosen])
         self.lost = had.copy()
