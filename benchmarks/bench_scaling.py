@@ -135,8 +135,8 @@ def report(runs, machine, load_end, quick, figure, n, slide) -> str:
         r2 = [x["reactions"][-1] for x in runs[2]][0]
         import numpy as np
         dr = float(np.linalg.norm(np.subtract(r1, r2)) / np.linalg.norm(r1))
-        out.append(f"Target: >= 1.6x on 2 ranks.  Measured total speedup: {sw:.2f}x (wall), "
-                   f"{sc:.2f}x (CPU) -- " + ("**met**" if max(sw, sc) >= 1.6 else "**missed**")
+        out.append(f"Target: >= 1.6x on 2 ranks (wall time).  Measured total speedup: {sw:.2f}x (wall), "
+                   f"{sc:.2f}x (CPU) -- " + ("**met**" if sw >= 1.6 else "**missed**")
                    + f".  Final reaction, 1 vs 2 ranks: relative difference {dr:.1e}.")
         out.append("")
     out.append(f"Chart: `benchmarks/figures/{figure.name}`.")
@@ -152,7 +152,10 @@ def main(argv=None) -> None:
     ap.add_argument("--ranks", default="1,2")
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--no-results", action="store_true")
-    ap.add_argument("--json")
+    ap.add_argument("--json", help="write the runs to this file as they finish")
+    ap.add_argument("--load", action="append", default=[], metavar="JSON",
+                    help="report runs saved with --json instead of running (repeatable; "
+                         "later files replace the rank counts they contain)")
     ap.add_argument("--profile", action="store_true",
                     help="run the largest rank count once more under cProfile (every rank) and "
                          "add the profiles to the report")
@@ -167,7 +170,9 @@ def main(argv=None) -> None:
     print(f"two_boxes n = {n}: {M.two_boxes_dofs(n):,} dofs")
     machine = B.machine()
     runs: dict[int, list[dict]] = {}
-    for _ in range(args.repeat):
+    for saved in args.load:
+        runs.update({int(r): v for r, v in json.loads(Path(saved).read_text()).items()})
+    for _ in range(0 if args.load else args.repeat):
         for r in (int(x) for x in args.ranks.split(",")):
             run = B.run_worker(Path(__file__), [str(n), str(args.slide)], ranks=r,
                                timeout=6 * 3600)

@@ -128,12 +128,15 @@ class ResultWriter:
             raise OutputError(error)
 
     def _canonical_ids(self, inter) -> np.ndarray:
-        """Slave node numbers that do not depend on the partition: order of reference coordinates."""
+        """Slave node numbers that do not depend on the partition: order of reference
+        coordinates, rounded to 1e-9 of the surface's extent (the coordinates of a node may
+        differ in the last bits between partitions: they are tabulated from different cells)."""
         X = self.comm.gather(inter.slaves.X, root=0)
         ids = None
         if self.rank0:
             allX = np.concatenate(X)
-            order = np.lexsort(allX.T[::-1])
+            unit = 1e-9 * max(float(np.ptp(allX, axis=0).max(initial=0.0)), 1e-300)
+            order = np.lexsort(np.round(allX / unit).T[::-1])
             ranks = np.empty(len(allX), dtype=np.int64)
             ranks[order] = np.arange(len(allX))
             bounds = np.cumsum([0] + [len(x) for x in X])

@@ -498,6 +498,25 @@ def read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
     return header, [dict(zip(header, r)) for r in body]
 
 
+def assert_same_history(rows: list[dict], serial_rows: list[dict], prefixes=("R_", "U_", "F_"),
+                        rtol: float = 1e-8) -> None:
+    """Same increments, and the columns starting with ``prefixes`` equal to ``rtol``
+    relative; components that vanish (round-off, ~1e-15 of the largest) are compared
+    relative to 1e-6 of the largest value of their kind instead."""
+    assert [(r["step"], r["increment"]) for r in rows] == \
+        [(r["step"], r["increment"]) for r in serial_rows]
+    for prefix in prefixes:
+        columns = [c for c in serial_rows[0] if c.startswith(prefix)]
+        if not columns:
+            continue
+        scale = max(abs(float(r[c])) for r in serial_rows for c in columns)
+        for row, ref in zip(rows, serial_rows):
+            for c in columns:
+                a, b = float(row[c]), float(ref[c])
+                assert abs(a - b) <= rtol * max(abs(b), 1e-6 * scale), \
+                    (row["step"], row["increment"], c, a, b)
+
+
 def increments_of(rows: list[dict[str, str]]) -> list[tuple[int, int]]:
     seen: dict[tuple[int, int], None] = {}
     for r in rows:
@@ -604,9 +623,10 @@ def test_rerun_replaces_results(workdir):
 
 # --------------------------------------------------------------------------- mpirun
 
-def _mpirun(*args: Any) -> Outcome:
+def mpirun_cli(ranks: int, *args: Any) -> Outcome:
+    """The command line under ``mpirun -n ranks`` (oversubscribed)."""
     from dolfinx_friction import compat  # Open MPI 4 (Debian 12) / 5 (Debian 13) launchers
-    command = [*compat.mpirun_command(2), sys.executable, "-m", "dolfinx_friction",
+    command = [*compat.mpirun_command(ranks), sys.executable, "-m", "dolfinx_friction",
                *map(str, args)]
     env = compat.mpirun_environment(cli_env())
     proc = subprocess.run(command, capture_output=True, text=True, env=env, timeout=TIMEOUT)
@@ -618,11 +638,11 @@ def test_mpirun_matches_serial(workdir, good_run):
     # a bad scene: one line, from rank 0 only
     bad = workdir / "case_mpi_bad.toml"
     bad.write_text(toml_dumps(edited(GOOD, [("step.0.bc.1.on", "nowhere")])))
-    assert_one_line_error(_mpirun("run", bad, "--out", workdir / "never"),
+    assert_one_line_error(mpirun_cli(2, "run", bad, "--out", workdir / "never"),
                           ["step.0.bc.1.on", "nowhere"])
     # a good scene: the same results as the serial run
     d = workdir / "mpi_out"
-    out = _mpirun("run", workdir / "good.toml", "--out", d, "--quiet")
+    out = mpirun_cli(2, "run", workdir / "good.toml", "--out", d, "--quiet")
     assert out.status == 0 and out.stdout == "" and out.stderr == "", str(out)
     serial_out, serial_dir = good_run
     assert serial_out.status == 0, str(serial_out)
@@ -630,16 +650,7 @@ def test_mpirun_matches_serial(workdir, good_run):
     serial_header, serial_rows = read_csv(serial_dir / "history.csv")
     assert header == serial_header
     assert len(rows) == len(serial_rows)
-    columns = [c for c in header if c.startswith("R_")]
-    # 1e-8 relative; components that vanish (round-off, ~1e-15 of the largest) are
-    # compared relative to 1e-6 of the largest reaction instead
-    scale = max(abs(float(r[c])) for r in serial_rows for c in columns)
-    for row, ref in zip(rows, serial_rows):
-        assert (row["step"], row["increment"]) == (ref["step"], ref["increment"])
-        for c in columns:
-            a, b = float(row[c]), float(ref[c])
-            assert abs(a - b) <= 1e-8 * max(abs(b), 1e-6 * scale), (row["step"], row["increment"],
-                                                                   c, a, b)
+    assert_same_history(rows, serial_rows, ("R_",))
     assert json.loads((d / "summary.json").read_text())["mpi_ranks"] == 2
     _, crows = read_csv(d / "contact.csv")
     _, serial_crows = read_csv(serial_dir / "contact.csv")
