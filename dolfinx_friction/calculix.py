@@ -59,7 +59,7 @@ from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 
-from dolfinx_friction.gmsh_io import gmsh_file
+from dolfinx_friction.gmsh_io import gmsh_file, group_elements
 from dolfinx_friction.model import ContactPair, Scene
 
 __all__ = ["CCX_FACES", "CcxError", "CcxRun", "ccx_available", "ccx_executable", "parse_dat",
@@ -182,23 +182,6 @@ def _gmsh_groups(gmsh) -> dict[str, tuple[int, list[int]]]:
     return named
 
 
-def _gmsh_elements(gmsh, dim: int, tags: Sequence[int]) -> dict[int, np.ndarray]:
-    blocks: dict[int, list[np.ndarray]] = {}
-    for tag in tags:
-        for ent in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
-            types, _, nodes = gmsh.model.mesh.getElements(dim, int(ent))
-            for etype, enodes in zip(types, nodes):
-                nn = int(gmsh.model.mesh.getElementProperties(int(etype))[3])
-                blocks.setdefault(int(etype), []).append(
-                    np.asarray(enodes, dtype=np.int64).reshape(-1, nn))
-    out = {}
-    for t, b in blocks.items():
-        a = np.concatenate(b)
-        _, first = np.unique(np.sort(a, axis=1), axis=0, return_index=True)
-        out[t] = a[np.sort(first)]
-    return out
-
-
 def _extract(gmsh, body_names: Sequence[str], where: str) -> CcxMesh:
     named = _gmsh_groups(gmsh)
     tags, coords, _ = gmsh.model.mesh.getNodes()
@@ -206,7 +189,7 @@ def _extract(gmsh, body_names: Sequence[str], where: str) -> CcxMesh:
     coords = np.asarray(coords, dtype=float).reshape(-1, 3)
     tags, first = np.unique(tags, return_index=True)
     coords = coords[first]
-    elements = {name: _gmsh_elements(gmsh, dim, t) for name, (dim, t) in named.items()}
+    elements = {name: group_elements(gmsh, dim, t) for name, (dim, t) in named.items()}
 
     xs, bodies, body_tags = [], {}, {}
     n_nodes, n_elems = 0, 0

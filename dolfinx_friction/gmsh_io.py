@@ -183,7 +183,7 @@ def _unique_rows(a: np.ndarray) -> np.ndarray:
     return a[np.sort(first)]
 
 
-def _group_elements(gmsh, dim: int, tags: list[int]) -> dict[int, np.ndarray]:
+def group_elements(gmsh, dim: int, tags: Sequence[int]) -> dict[int, np.ndarray]:
     """Element type -> (n, nodes per element) Gmsh node tags of a physical group."""
     blocks: dict[int, list[np.ndarray]] = {}
     for tag in tags:
@@ -234,7 +234,7 @@ def _extract(gmsh, body_names: Sequence[str], where: str) -> _Plan:
     # Elements of every named group
     elements: dict[str, dict[int, np.ndarray]] = {}
     for name, (dim, tags) in named.items():
-        elems = _group_elements(gmsh, dim, tags)
+        elems = group_elements(gmsh, dim, tags)
         if sum(len(a) for a in elems.values()) == 0:
             raise MeshError(f"{where}: physical group '{name}' is empty (no mesh elements)")
         elements[name] = elems
