@@ -25,6 +25,7 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+import argparse  # noqa: E402
 import contextlib  # noqa: E402
 import datetime  # noqa: E402
 import gc  # noqa: E402
@@ -305,6 +306,15 @@ def profile_table(rows, label: str = "") -> str:
 
 
 # ----------------------------------------------------------------------------- workers
+def worker_parser(doc: str) -> argparse.ArgumentParser:
+    """Parser of a script run again as its own workers: hidden --worker, --quick, --no-results."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)  # see run_worker
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--no-results", action="store_true")
+    return ap
+
+
 def run_worker(script: Path, args: list[str], ranks: int = 1, timeout: float = 3600.0,
                env: dict | None = None) -> dict:
     """Run ``script --worker ARGS`` (under ``mpirun -n ranks`` if ranks > 1) and return the

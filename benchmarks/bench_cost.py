@@ -33,7 +33,6 @@ Target: contact overhead <= 1.3.
 """
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -51,13 +50,18 @@ FULL_SIZES, FULL_REUSE, FULL_ITERATIVE = (6, 8, 10, 12, 16, 18), (6, 8, 10, 12),
 QUICK_SIZES, QUICK_REUSE, QUICK_ITERATIVE = (4, 6), (4,), ()
 
 
-def scene(n: int, contact: bool = True, slide_increments: int = 2):
-    from dolfinx_friction.model import BC, Body, ContactPair, Output, Scene, Step
+def two_boxes_mesh(n: int) -> Path:
+    """The two_boxes mesh at resolution n in the work directory, built if missing."""
     path = B.work_dir("boxes") / f"two_boxes_n{n}.msh"
     if not path.exists():
         M.two_boxes(path, n)
+    return path
+
+
+def scene(n: int, contact: bool = True, slide_increments: int = 2):
+    from dolfinx_friction.model import BC, Body, ContactPair, Output, Scene, Step
     return Scene(
-        mesh=path, bodies=(Body("block", E, NU), Body("foundation", E, NU)),
+        mesh=two_boxes_mesh(n), bodies=(Body("block", E, NU), Body("foundation", E, NU)),
         contacts=(ContactPair("block_bottom", "foundation_top", mu=MU),) if contact else (),
         steps=(Step("press", increments=1, bcs=(BC("foundation_bottom", (0.0, 0.0, 0.0)),
                                                 BC("block_top", (0.0, 0.0, -PRESS)))),
@@ -262,13 +266,10 @@ def report(rows, machine, load_end, quick, figure) -> str:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
-    ap.add_argument("--quick", action="store_true")
+    ap = B.worker_parser(__doc__)
     ap.add_argument("--sizes", help="two_boxes resolutions n for MUMPS (comma separated)")
     ap.add_argument("--reuse-sizes")
     ap.add_argument("--iterative-sizes")
-    ap.add_argument("--no-results", action="store_true")
     ap.add_argument("--json", help="also write all rows to this file")
     ap.add_argument("--factor-stats", help="sizes n (comma separated) at which to measure the "
                                            "matrix and factor size with and without contact "
@@ -311,9 +312,7 @@ def main(argv=None) -> None:
         plan += [(n, True, False, "gamg"), (n, False, False, "gamg")]
     rows = []
     for n, contact, reuse_, solver in plan:
-        mesh = B.work_dir("boxes") / f"two_boxes_n{n}.msh"
-        if not mesh.exists():  # built once, here, not concurrently by workers
-            M.two_boxes(mesh, n)
+        two_boxes_mesh(n)  # built once, here, not concurrently by workers
         row = {"n": n, "contact": contact, "reuse": reuse_, "solver": solver}
         try:
             row.update(B.run_worker(Path(__file__), [str(n), str(int(contact)),

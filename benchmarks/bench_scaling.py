@@ -20,7 +20,6 @@ given with each run.  Target: >= 1.6x on 2 ranks.
 """
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -144,14 +143,11 @@ def report(runs, machine, load_end, quick, figure, n, slide) -> str:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
-    ap.add_argument("--quick", action="store_true")
+    ap = B.worker_parser(__doc__)
     ap.add_argument("--n", type=int, help="two_boxes resolution (default 18; quick: 5)")
     ap.add_argument("--slide", type=int, default=1, help="slide increments")
     ap.add_argument("--ranks", default="1,2")
     ap.add_argument("--repeat", type=int, default=1)
-    ap.add_argument("--no-results", action="store_true")
     ap.add_argument("--json", help="write the runs to this file as they finish")
     ap.add_argument("--load", action="append", default=[], metavar="JSON",
                     help="report runs saved with --json instead of running (repeatable; "
@@ -164,9 +160,7 @@ def main(argv=None) -> None:
     if args.worker:
         return worker(args.worker)
     n = args.n or (5 if args.quick else 18)
-    mesh = B.work_dir("boxes") / f"two_boxes_n{n}.msh"
-    if not mesh.exists():
-        M.two_boxes(mesh, n)
+    C.two_boxes_mesh(n)  # built here, not by the ranks at once
     print(f"two_boxes n = {n}: {M.two_boxes_dofs(n):,} dofs")
     machine = B.machine()
     runs: dict[int, list[dict]] = {}
@@ -187,9 +181,7 @@ def main(argv=None) -> None:
     text = report(runs, machine, B.load_average(), args.quick, figure, n, args.slide)
     if args.profile:
         r, pn = max(runs), args.profile_n or n
-        pmesh = B.work_dir("boxes") / f"two_boxes_n{pn}.msh"
-        if not pmesh.exists():
-            M.two_boxes(pmesh, pn)
+        C.two_boxes_mesh(pn)
         prof = B.run_worker(Path(__file__), [str(pn), str(args.slide), "profile"], ranks=r,
                             timeout=6 * 3600)
         for k, rows in enumerate(prof["profile_per_rank"]):

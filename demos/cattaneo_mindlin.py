@@ -23,6 +23,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import _common as C  # noqa: F401  (pyvista before dolfinx)
+from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 import numpy as np
 
 from dolfinx_friction.analytic import (cattaneo_mindlin_stick_half_width,
@@ -45,11 +46,7 @@ def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
     initial contact point (the block's is ``master_ratio`` times larger);
     ``h_far``: size far away.
     """
-    import gmsh
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("cattaneo_mindlin")
+    with G.gmsh_model("cattaneo_mindlin") as gmsh:
         geo = gmsh.model.geo
         W, D = BLOCK
         c = geo.addPoint(0, R, 0)
@@ -67,62 +64,33 @@ def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
                                                        b_top2])])
         geo.synchronize()
 
-        f = gmsh.model.mesh.field
-        fields = []
-        for point, h, surf, curves in ((bottom, h_contact, cyl, [arc1, arc2, top1, top2]),
-                                       (mid, master_ratio * h_contact, block,
-                                        [b_left, b_bottom, b_right, b_top1, b_top2])):
-            dist = f.add("Distance")
-            f.setNumbers(dist, "PointsList", [point])
-            thr = f.add("Threshold")
-            f.setNumber(thr, "InField", dist)
-            f.setNumber(thr, "SizeMin", h)
-            f.setNumber(thr, "SizeMax", h_far)
-            f.setNumber(thr, "DistMin", refine_radius)
-            f.setNumber(thr, "DistMax", refine_radius + 12.0)
-            restrict = f.add("Restrict")
-            f.setNumber(restrict, "InField", thr)
-            f.setNumbers(restrict, "SurfacesList", [surf])
-            f.setNumbers(restrict, "CurvesList", curves)
-            fields.append(restrict)
-        fmin = f.add("Min")
-        f.setNumbers(fmin, "FieldsList", fields)
-        f.setAsBackgroundMesh(fmin)
-        for key, value in (("Mesh.MeshSizeExtendFromBoundary", 0),
-                           ("Mesh.MeshSizeFromPoints", 0), ("Mesh.MeshSizeFromCurvature", 0),
-                           ("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
-                           ("Mesh.RecombinationAlgorithm", 1)):
+        # element size h_contact (cylinder) and master_ratio * h_contact (block) up to
+        # refine_radius from the initial contact point, growing to h_far 12 further out
+        G.size_field([([bottom], h_contact, (2, cyl)),
+                      ([mid], master_ratio * h_contact, (2, block))],
+                     h_far, refine_radius, refine_radius + 12.0)
+        for key, value in (("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
+                           ("Mesh.RecombinationAlgorithm", 1)):  # quadrilaterals
             gmsh.option.setNumber(key, value)
 
-        def group(dim, tags, name):
-            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
-
-        group(2, [cyl], "cylinder")
-        group(2, [block], "block")
-        group(1, [arc1, arc2], "cylinder_surface")
-        group(1, [top1, top2], "cylinder_top")
-        group(0, [c], "cylinder_top_centre")
-        group(1, [b_top1, b_top2], "block_top")
-        group(1, [b_bottom], "block_bottom")
+        G.physical_group(2, [cyl], "cylinder")
+        G.physical_group(2, [block], "block")
+        G.physical_group(1, [arc1, arc2], "cylinder_surface")
+        G.physical_group(1, [top1, top2], "cylinder_top")
+        G.physical_group(0, [c], "cylinder_top_centre")
+        G.physical_group(1, [b_top1, b_top2], "block_top")
+        G.physical_group(1, [b_bottom], "block_bottom")
         gmsh.model.mesh.generate(2)
-        types = gmsh.model.mesh.getElementTypes(2)
-        if len(types) != 1:  # dolfinx 0.5 meshes hold one cell type
-            raise RuntimeError(f"mixed 2D element types {types}: refine differently")
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
+        G.write_msh(path)
 
 
-def profile_plot(path: Path, x, p, qx, status, P, Q, a, c_num, shift) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def profile_plot(result, x, qx, status, P, Q, c_num, shift) -> None:
+    """Nodal tangential tractions against Cattaneo-Mindlin's q(x)."""
     E_star = effective_modulus(E, NU, E, NU)
     a_h, p0 = hertz_line(P, R, E_star)
     c = cattaneo_mindlin_stick_half_width(a_h, Q, MU, P)
     xs = np.linspace(-1.4 * a_h, 1.4 * a_h, 801)
-    fig, ax = plt.subplots(figsize=(7.0, 4.2), dpi=120)
+    fig, ax = C.pyplot().subplots(figsize=(7.0, 4.2), dpi=120)
     ax.plot(xs, hertz_line_pressure(xs, P, R, E_star) * MU, "k--", lw=1,
             label="mu p (Hertz)")
     ax.plot(xs, cattaneo_mindlin_traction(xs, a_h, c, MU, p0), "k-",
@@ -138,17 +106,12 @@ def profile_plot(path: Path, x, p, qx, status, P, Q, a, c_num, shift) -> None:
     ax.set_title(f"Cattaneo-Mindlin: Q/(mu P) = {Q / (MU * P):.3f}", fontsize=10)
     ax.legend(fontsize=7, loc="upper right")
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    C.save_figure(fig, result, "cattaneo_mindlin_traction")
 
 
 def main(argv=None) -> None:
-    args = C.parse_args(__doc__.splitlines()[0], argv)
-    scene = Path(args.scene) if args.scene else SCENE
-    C.ensure_mesh(MESH, build_mesh, args.rebuild)
-    result, seconds = C.run_scene(scene, args)
-    C.report(result, seconds)
+    args, scene = C.command_line(__doc__, SCENE, argv)
+    result = C.run_demo(args, scene, MESH, build_mesh)
     if not args.no_render:
         C.render(result, "cattaneo_mindlin", scalar="status", warp=5.0,
                  title="Cattaneo-Mindlin partial slip", contact_margin=0.25)
@@ -195,9 +158,7 @@ def main(argv=None) -> None:
           f"{np.sqrt(np.mean(dev ** 2)):.4f} ({100 * np.sqrt(np.mean(dev ** 2)) / (MU * p0):.1f} "
           f"% of mu p0)")
     if not args.no_render:
-        path = Path(result.directory) / "cattaneo_mindlin_traction.png"
-        profile_plot(path, x, p, qx, status, P, Q, a, c_num, shift)
-        print(f"picture: {path}")
+        profile_plot(result, x, qx, status, P, Q, c_num, shift)
 
 
 if __name__ == "__main__":

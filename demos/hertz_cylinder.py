@@ -22,6 +22,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import _common as C  # noqa: F401  (pyvista before dolfinx)
+from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 import numpy as np
 
 from dolfinx_friction.analytic import (effective_modulus, fit_elliptic, hertz_line,
@@ -41,11 +42,7 @@ def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
     contact point (the block's is ``master_ratio`` times larger); ``h_far``:
     size far away.
     """
-    import gmsh
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("hertz_cylinder")
+    with G.gmsh_model("hertz_cylinder") as gmsh:
         geo = gmsh.model.geo
         W, D = BLOCK
         # cylinder: quarter disk x >= 0, centre (0, R)
@@ -63,81 +60,29 @@ def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
         block = geo.addPlaneSurface([geo.addCurveLoop([b_sym, b_bottom, b_right, b_top])])
         geo.synchronize()
 
-        f = gmsh.model.mesh.field
-        fields = []
-        for point, h in ((p0, h_contact), (q[0], master_ratio * h_contact)):
-            dist = f.add("Distance")
-            f.setNumbers(dist, "PointsList", [point])
-            thr = f.add("Threshold")
-            f.setNumber(thr, "InField", dist)
-            f.setNumber(thr, "SizeMin", h)
-            f.setNumber(thr, "SizeMax", h_far)
-            f.setNumber(thr, "DistMin", refine_radius)
-            f.setNumber(thr, "DistMax", refine_radius + 12.0)
-            restrict = f.add("Restrict")
-            f.setNumber(restrict, "InField", thr)
-            f.setNumbers(restrict, "SurfacesList", [cyl if point == p0 else block])
-            f.setNumbers(restrict, "CurvesList", [arc, top, sym] if point == p0
-                         else [b_sym, b_bottom, b_right, b_top])
-            fields.append(restrict)
-        fmin = f.add("Min")
-        f.setNumbers(fmin, "FieldsList", fields)
-        f.setAsBackgroundMesh(fmin)
-        for key, value in (("Mesh.MeshSizeExtendFromBoundary", 0),
-                           ("Mesh.MeshSizeFromPoints", 0), ("Mesh.MeshSizeFromCurvature", 0),
-                           ("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
-                           ("Mesh.RecombinationAlgorithm", 1)):
+        # element size h_contact (cylinder) and master_ratio * h_contact (block) up to
+        # refine_radius from the first contact point, growing to h_far 12 further out
+        G.size_field([([p0], h_contact, (2, cyl)), ([q[0]], master_ratio * h_contact, (2, block))],
+                     h_far, refine_radius, refine_radius + 12.0)
+        for key, value in (("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
+                           ("Mesh.RecombinationAlgorithm", 1)):  # quadrilaterals
             gmsh.option.setNumber(key, value)
 
-        def group(dim, tags, name):
-            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
-
-        group(2, [cyl], "cylinder")
-        group(2, [block], "block")
-        group(1, [arc], "cylinder_surface")
-        group(1, [top], "cylinder_top")
-        group(1, [sym], "cylinder_symmetry")
-        group(1, [b_top], "block_top")
-        group(1, [b_bottom], "block_bottom")
-        group(1, [b_sym], "block_symmetry")
+        G.physical_group(2, [cyl], "cylinder")
+        G.physical_group(2, [block], "block")
+        G.physical_group(1, [arc], "cylinder_surface")
+        G.physical_group(1, [top], "cylinder_top")
+        G.physical_group(1, [sym], "cylinder_symmetry")
+        G.physical_group(1, [b_top], "block_top")
+        G.physical_group(1, [b_bottom], "block_bottom")
+        G.physical_group(1, [b_sym], "block_symmetry")
         gmsh.model.mesh.generate(2)
-        types = gmsh.model.mesh.getElementTypes(2)
-        if len(types) != 1:  # dolfinx 0.5 meshes hold one cell type
-            raise RuntimeError(f"mixed 2D element types {types}: refine differently")
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-
-
-def profile_plot(path: Path, x, p, P, E_star, a_fit, title: str) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    a, p0 = hertz_line(P, R, E_star)
-    xs = np.linspace(0, 1.6 * a, 400)
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
-    ax.plot(xs, hertz_line_pressure(xs, P, R, E_star), "k-",
-            label=f"Hertz: a = {a:.4f}, p0 = {p0:.3f}")
-    ax.plot(x, p, "o", ms=4, color="#d62728", label="nodal F_N / A_p")
-    ax.axvline(a_fit, color="#1f77b4", ls=":", label=f"fitted a = {a_fit:.4f}")
-    ax.set_xlabel("x (distance from the symmetry plane)")
-    ax.set_ylabel("contact pressure")
-    ax.set_xlim(0, 1.6 * a)
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+        G.write_msh(path)
 
 
 def main(argv=None) -> None:
-    args = C.parse_args(__doc__.splitlines()[0], argv)
-    scene = Path(args.scene) if args.scene else SCENE
-    C.ensure_mesh(MESH, build_mesh, args.rebuild)
-    result, seconds = C.run_scene(scene, args)
-    C.report(result, seconds)
+    args, scene = C.command_line(__doc__, SCENE, argv)
+    result = C.run_demo(args, scene, MESH, build_mesh)
     if not args.no_render:
         C.render(result, "hertz_cylinder", warp=1.0, title="Hertz line contact (quarter model)")
     st = C.contact_state(result)
@@ -164,10 +109,13 @@ def main(argv=None) -> None:
     inside = x < 0.9 * a
     err = np.abs(p[inside] - hertz_line_pressure(x[inside], P, R, E_star)).max() / p0
     print(f"max |p - p_Hertz| / p0 over |x| < 0.9 a: {100 * err:.2f} %")
-    if not args.no_render:
-        path = Path(result.directory) / "hertz_cylinder_profile.png"
-        profile_plot(path, x, p, P, E_star, a_fit, "Hertz line contact: cylinder on a block")
-        print(f"picture: {path}")
+    if not args.no_render:  # nodal pressures against Hertz
+        xs = np.linspace(0, 1.6 * a, 400)
+        C.profile_plot(result, "hertz_cylinder_profile", x, p,
+                       (xs, hertz_line_pressure(xs, P, R, E_star),
+                        f"Hertz: a = {a:.4f}, p0 = {p0:.3f}"), a_fit,
+                       "x (distance from the symmetry plane)",
+                       "Hertz line contact: cylinder on a block")
 
 
 if __name__ == "__main__":

@@ -24,6 +24,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import _common as C  # noqa: F401  (pyvista before dolfinx)
+from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 import numpy as np
 
 from dolfinx_friction.analytic import (effective_modulus, fit_elliptic, hertz_sphere,
@@ -47,11 +48,7 @@ def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
     ``h_contact``: sphere element size within ``refine_radius`` of the pole
     (the block's is ``master_ratio`` times larger); ``h_far``: size far away.
     """
-    import gmsh
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("hertz_sphere")
+    with G.gmsh_model("hertz_sphere") as gmsh:
         occ = gmsh.model.occ
         ball = occ.addSphere(0, 0, R, R)
         box = occ.addBox(0, 0, 0, R, R, R)
@@ -70,9 +67,7 @@ def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
                 out[s] = com
             return out
 
-        def group(dim, tags, name):
-            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
-
+        group = G.physical_group
         sphere_faces = faces(sphere)
         sym_x = [s for s, c in sphere_faces.items() if abs(c[0]) < 1e-6]
         sym_y = [s for s, c in sphere_faces.items() if abs(c[1]) < 1e-6]
@@ -88,7 +83,7 @@ def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
                                                                    eps, 0)]
         sphere_pole = [p for p in poles if p in {t for _, t in gmsh.model.getBoundary(
             [(3, sphere)], combined=False, recursive=True)}]
-        refine = [(sphere_pole, h_contact, sphere)]
+        refine = [(sphere_pole, h_contact, (3, sphere))]
         if block is not None:
             block_faces = faces(block)
             L, D = BLOCK
@@ -100,72 +95,21 @@ def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
             group(2, [s for s, c in block_faces.items() if abs(c[1]) < 1e-6],
                   "block_symmetry_y")
             block_corner = [p for p in poles if p not in sphere_pole]
-            refine.append((block_corner, master_ratio * h_contact, block))
+            refine.append((block_corner, master_ratio * h_contact, (3, block)))
 
-        f = gmsh.model.mesh.field
-        fields = []
-        for points, h, vol in refine:
-            dist = f.add("Distance")
-            f.setNumbers(dist, "PointsList", points)
-            thr = f.add("Threshold")
-            f.setNumber(thr, "InField", dist)
-            f.setNumber(thr, "SizeMin", h)
-            f.setNumber(thr, "SizeMax", h_far)
-            f.setNumber(thr, "DistMin", refine_radius)
-            f.setNumber(thr, "DistMax", refine_radius + 10.0)
-            restrict = f.add("Restrict")
-            f.setNumber(restrict, "InField", thr)
-            f.setNumbers(restrict, "VolumesList", [vol])
-            bnd = [t for _, t in gmsh.model.getBoundary([(3, vol)], oriented=False)]
-            f.setNumbers(restrict, "SurfacesList", bnd)
-            f.setNumbers(restrict, "CurvesList", list({t for _, t in gmsh.model.getBoundary(
-                [(2, s) for s in bnd], combined=False, oriented=False)}))
-            fields.append(restrict)
-        fmin = f.add("Min")
-        f.setNumbers(fmin, "FieldsList", fields)
-        f.setAsBackgroundMesh(fmin)
-        for key, value in (("Mesh.MeshSizeExtendFromBoundary", 0),
-                           ("Mesh.MeshSizeFromPoints", 0), ("Mesh.MeshSizeFromCurvature", 0),
-                           ("Mesh.Algorithm", 6), ("Mesh.Algorithm3D", 1)):
-            gmsh.option.setNumber(key, value)
+        # size h up to refine_radius from the pole (the block's corner), h_far 10 further out
+        G.size_field(refine, h_far, refine_radius, refine_radius + 10.0)
+        gmsh.option.setNumber("Mesh.Algorithm", 6)
+        gmsh.option.setNumber("Mesh.Algorithm3D", 1)
         gmsh.model.mesh.generate(3)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.option.setNumber("Mesh.Binary", 1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-
-
-def profile_plot(path: Path, r, p, F, E_star, a_fit, title: str) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    a, p0, _ = hertz_sphere(F, R, E_star)
-    rs = np.linspace(0, 1.6 * a, 400)
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
-    ax.plot(rs, hertz_sphere_pressure(rs, F, R, E_star), "k-",
-            label=f"Hertz: a = {a:.4f}, p0 = {p0:.3f}")
-    ax.plot(r, p, "o", ms=3, color="#d62728", label="nodal F_N / A_p")
-    ax.axvline(a_fit, color="#1f77b4", ls=":", label=f"fitted a = {a_fit:.4f}")
-    ax.set_xlabel("r (distance from the axis)")
-    ax.set_ylabel("contact pressure")
-    ax.set_xlim(0, 1.6 * a)
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+        G.write_msh(path, binary=True)
 
 
 def main(argv=None) -> None:
-    args = C.parse_args(__doc__.splitlines()[0], argv)
-    scene = Path(args.scene).resolve() if args.scene else SCENE
+    args, scene = C.command_line(__doc__, SCENE, argv)
     mesh, resolution = MESHES.get(scene.name, MESHES["hertz_sphere.toml"])
     with_block = resolution["with_block"]
-    C.ensure_mesh(mesh, build_mesh, args.rebuild, **resolution)
-    result, seconds = C.run_scene(scene, args)
-    C.report(result, seconds)
+    result = C.run_demo(args, scene, mesh, build_mesh, **resolution)
     name = scene.stem
     what = "an elastic block" if with_block else "a rigid plane"
     if not args.no_render:
@@ -198,10 +142,12 @@ def main(argv=None) -> None:
           f"{int((p > 0.2 * p.max()).sum())} nodes]")
     print(f"lumping: 4 sum A_p p_Hertz(r_p) / F = {lumped:.4f} (nodal pressures carrying F exceed "
           f"Hertz by ~{100 * (1 / lumped - 1):.1f} % on average from this alone)")
-    if not args.no_render:
-        path = Path(result.directory) / f"{name}_profile.png"
-        profile_plot(path, r, p, F, E_star, a_fit, f"Hertz: sphere on {what}")
-        print(f"picture: {path}")
+    if not args.no_render:  # nodal pressures against Hertz
+        rs = np.linspace(0, 1.6 * a, 400)
+        C.profile_plot(result, f"{name}_profile", r, p,
+                       (rs, hertz_sphere_pressure(rs, F, R, E_star),
+                        f"Hertz: a = {a:.4f}, p0 = {p0:.3f}"), a_fit,
+                       "r (distance from the axis)", f"Hertz: sphere on {what}", ms=3)
 
 
 if __name__ == "__main__":

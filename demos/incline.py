@@ -21,6 +21,7 @@ import math
 from pathlib import Path
 
 import _common as C  # noqa: F401  (pyvista before dolfinx)
+from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 
 from dolfinx_friction.analytic import incline_push_ratio, incline_hold_ratio
 
@@ -35,11 +36,7 @@ def build_mesh(path: Path, nx: int = 20, ny: int = 10) -> None:
 
     ``nx`` elements along the slope, ``ny`` across the height.
     """
-    import gmsh
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("incline")
+    with G.gmsh_model("incline") as gmsh:
         geo = gmsh.model.geo
         p = [geo.addPoint(0, 0, 0), geo.addPoint(LENGTH, LENGTH * TAN_ALPHA, 0),
              geo.addPoint(LENGTH, HEIGHT, 0), geo.addPoint(0, HEIGHT, 0)]
@@ -52,32 +49,20 @@ def build_mesh(path: Path, nx: int = 20, ny: int = 10) -> None:
         m.setTransfiniteSurface(surface)
         m.setRecombine(2, surface)
 
-        def group(dim, tags, name):
-            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
-
-        group(2, [surface], "block")
-        group(1, [lines[0]], "block_bottom")
-        group(1, [lines[2]], "block_top")
+        G.physical_group(2, [surface], "block")
+        G.physical_group(1, [lines[0]], "block_bottom")
+        G.physical_group(1, [lines[2]], "block_top")
         m.generate(2)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
+        G.write_msh(path)
 
 
 def main(argv=None) -> None:
-    args = C.parse_args(__doc__.splitlines()[0], argv)
-    scene = Path(args.scene) if args.scene else SCENE
-    C.ensure_mesh(MESH, build_mesh, args.rebuild)
-    result, seconds = C.run_scene(scene, args)
-    C.report(result, seconds)
+    args, scene = C.command_line(__doc__, SCENE, argv)
+    result = C.run_demo(args, scene, MESH, build_mesh)
     if not args.no_render:
-        C.render(result, "incline_status", scalar="status", warp=5.0,
-                 title="block pushed up a rigid slope (tan a = 0.1, mu = 0.3)",
-                 panels=("overview",))
-        C.render(result, "incline_pressure", warp=5.0,
-                 title="block pushed up a rigid slope (tan a = 0.1, mu = 0.3)",
-                 panels=("overview",))
+        C.render_status_and_pressure(
+            result, "incline", warp=5.0, panels=("overview",),
+            title="block pushed up a rigid slope (tan a = 0.1, mu = 0.3)")
     V = Q * LENGTH
     ref = incline_push_ratio(TAN_ALPHA, MU)
     C.root_print(f"reference H/V = (tan a + mu)/(1 - mu tan a) = {ref:.6f}  "
@@ -85,8 +70,7 @@ def main(argv=None) -> None:
     C.root_print("step   inc  slipping/active   H/V")
     for inc in result.increments:
         H = inc.reactions["block_top"][0]
-        C.root_print(f"{inc.step_name:>6} {inc.increment:3d}   {inc.slipping:3d}/{inc.active:3d}"
-                     f"          {H / V:.6f}")
+        C.root_print(f"{C.increment_line(inc)}          {H / V:.6f}")
     H = result.increments[-1].reactions["block_top"][0]
     C.root_print(f"final H/V = {H / V:.6f} vs {ref:.6f} ({C.relerr(H / V, ref)}); "
                  f"alpha = {math.degrees(math.atan(TAN_ALPHA)):.3f} deg")

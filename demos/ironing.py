@@ -20,6 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import _common as C  # noqa: F401  (pyvista before dolfinx)
+from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 
 SCENE = C.HERE / "ironing.toml"
 MESH = C.HERE / "ironing.msh"
@@ -36,11 +37,7 @@ def build_mesh(path: Path, nx: int = 120, ny: int = 24, bias: float = 0.9,
     the top.  Indenter (radius 2, centre (3, 7), flat top at y = 7): ``n_arc``
     elements along its arc (quadrilaterals).
     """
-    import gmsh
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("ironing")
+    with G.gmsh_model("ironing") as gmsh:
         geo = gmsh.model.geo
         p = [geo.addPoint(0, 0, 0), geo.addPoint(LENGTH, 0, 0), geo.addPoint(LENGTH, HEIGHT, 0),
              geo.addPoint(0, HEIGHT, 0)]
@@ -71,38 +68,23 @@ def build_mesh(path: Path, nx: int = 120, ny: int = 24, bias: float = 0.9,
         gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 1)
         gmsh.option.setNumber("Mesh.SubdivisionAlgorithm", 1)
 
-        def group(dim, tags, name):
-            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
-
-        group(2, [surface], "block")
-        group(1, [top], "block_top")
-        group(1, [bottom], "block_bottom")
-        group(2, [die], "die")
-        group(1, [arc1, arc2], "die_surface")
-        group(1, [die_top], "die_top")
+        G.physical_group(2, [surface], "block")
+        G.physical_group(1, [top], "block_top")
+        G.physical_group(1, [bottom], "block_bottom")
+        G.physical_group(2, [die], "die")
+        G.physical_group(1, [arc1, arc2], "die_surface")
+        G.physical_group(1, [die_top], "die_top")
         m.generate(2)
-        types = m.getElementTypes(2)
-        if len(types) != 1:  # dolfinx 0.5 meshes hold one cell type
-            raise RuntimeError(f"mixed 2D element types {types}: mesh differently")
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
+        G.write_msh(path)
 
 
 def main(argv=None) -> None:
-    args = C.parse_args(__doc__.splitlines()[0], argv)
-    scene = Path(args.scene) if args.scene else SCENE
-    C.ensure_mesh(MESH, build_mesh, args.rebuild)
-    result, seconds = C.run_scene(scene, args)
-    C.report(result, seconds)
+    args, scene = C.command_line(__doc__, SCENE, argv)
+    result = C.run_demo(args, scene, MESH, build_mesh)
     if not args.no_render:
-        C.render(result, "ironing_status", scalar="status", warp=1.0,
-                 title="ironing: stiff indenter dragged over a soft block, mu = 0.3",
-                 contact_margin=1.0)
-        C.render(result, "ironing_pressure", warp=1.0,
-                 title="ironing: stiff indenter dragged over a soft block, mu = 0.3",
-                 contact_margin=1.0)
+        C.render_status_and_pressure(
+            result, "ironing", warp=1.0, contact_margin=1.0,
+            title="ironing: stiff indenter dragged over a soft block, mu = 0.3")
     C.root_print("step     inc   active slipping   R_y        |R_x|/|R_y|   (die_top reaction)")
     ratios = []
     for inc in result.increments:

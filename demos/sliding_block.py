@@ -18,6 +18,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import _common as C  # noqa: F401  (pyvista before dolfinx)
+from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 
 SCENE = C.HERE / "sliding_block.toml"
 MESH = C.HERE / "sliding_block.msh"
@@ -32,11 +33,7 @@ def build_mesh(path: Path, n_block: int = 7, n_found: tuple[int, int] = (12, 6),
     the foundation top along x and y; ``layers``: elements through the
     thickness of the block and of the foundation.
     """
-    import gmsh
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("sliding_block")
+    with G.gmsh_model("sliding_block") as gmsh:
         occ = gmsh.model.occ
         found = occ.addBox(0, 0, 0, 60, 30, 10)
         block = occ.addBox(10, 5, 10, 20, 20, 10)
@@ -64,38 +61,26 @@ def build_mesh(path: Path, n_block: int = 7, n_found: tuple[int, int] = (12, 6),
                     return s
             raise RuntimeError("face not found")
 
-        def group(dim, tags, name):
-            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
-
-        group(3, [block], "block")
-        group(3, [found], "foundation")
-        group(2, [face(block, 2, 10.0)], "block_bottom")
-        group(2, [face(block, 2, 20.0)], "block_top")
-        group(2, [face(found, 2, 10.0)], "foundation_top")
-        group(2, [face(found, 2, 0.0)], "foundation_bottom")
+        G.physical_group(3, [block], "block")
+        G.physical_group(3, [found], "foundation")
+        G.physical_group(2, [face(block, 2, 10.0)], "block_bottom")
+        G.physical_group(2, [face(block, 2, 20.0)], "block_top")
+        G.physical_group(2, [face(found, 2, 10.0)], "foundation_top")
+        G.physical_group(2, [face(found, 2, 0.0)], "foundation_bottom")
         m.generate(3)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
+        G.write_msh(path)
 
 
 def main(argv=None) -> None:
-    args = C.parse_args(__doc__.splitlines()[0], argv)
-    scene = Path(args.scene) if args.scene else SCENE
-    C.ensure_mesh(MESH, build_mesh, args.rebuild)
-    result, seconds = C.run_scene(scene, args)
-    C.report(result, seconds)
+    args, scene = C.command_line(__doc__, SCENE, argv)
+    result = C.run_demo(args, scene, MESH, build_mesh)
     if not args.no_render:
-        C.render(result, "sliding_block_pressure", warp=50.0, amplify="deformation",
-                 title="block slid on a foundation, mu = 0.3")
-        C.render(result, "sliding_block_status", scalar="status", warp=50.0,
-                 amplify="deformation", title="block slid on a foundation, mu = 0.3")
+        C.render_status_and_pressure(result, "sliding_block", warp=50.0, amplify="deformation",
+                                     title="block slid on a foundation, mu = 0.3")
     C.root_print("increment  slipping/active   -R_x/R_z (platen)")
     for inc in result.increments:
         R = inc.reactions["block_top"]
-        C.root_print(f"{inc.step_name:>6} {inc.increment:3d}   {inc.slipping:3d}/{inc.active:3d}"
-                     f"        {abs(R[0]) / abs(R[2]):.5f}")
+        C.root_print(f"{C.increment_line(inc)}        {abs(R[0]) / abs(R[2]):.5f}")
     R = result.increments[-1].reactions["block_top"]
     ratio = abs(R[0]) / abs(R[2])
     C.root_print(f"final friction ratio |R_x|/|R_z| = {ratio:.5f}  vs mu = {MU} "
