@@ -34,12 +34,13 @@ class RunResult:
 def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         overrides: Sequence[str] = (), quiet: bool = False, write: bool = True,
         comm: MPI.Comm = MPI.COMM_WORLD, petsc_options: Optional[dict] = None,
-        reuse_factorisation: bool = False) -> RunResult:
+        reuse_factorisation: Optional[bool] = None) -> RunResult:
     """Solve a scene (a :class:`Scene` or a scene file) and write its results.
 
     ``out`` overrides ``[output] dir``; ``write=False`` keeps everything in memory;
     ``petsc_options`` (without prefix) set the linear solver; ``reuse_factorisation``
-    keeps an LU factorisation as GMRES preconditioner across Newton iterations.
+    keeps a factorisation as GMRES preconditioner across Newton iterations (default:
+    yes with the default MUMPS solver, no with ``petsc_options``; see ``linear``).
     Raises :class:`ConvergenceError` (after writing ``summary.json``) when an
     increment fails after all cutbacks.
     """

@@ -109,7 +109,8 @@ class Solver:
     """Drives a :class:`ContactProblem` through the steps of its scene."""
 
     def __init__(self, problem: ContactProblem, options_prefix: str = "dolfinx_friction_",
-                 petsc_options: Optional[dict] = None, reuse_factorisation: bool = False):
+                 petsc_options: Optional[dict] = None,
+                 reuse_factorisation: Optional[bool] = None):
         self.problem = problem
         p = problem
         self.comm, self.gdim = p.comm, p.gdim
