@@ -540,6 +540,10 @@ def run_case(case: dict) -> dict:
                        mean_iterations=sum(i.iterations for i in incs) / len(incs),
                        penetration=pen, warned=bool(pen > PENETRATION_WARNING),
                        active=incs[-1].active, slipping=incs[-1].slipping)
+            # slave nodes in contact reported as having slid off the master surface
+            off = [(i.t, sum(getattr(i, "detached", {}).values())) for i in incs]
+            out.update(detached=sum(n for _, n in off),
+                       detached_t=[t for t, n in off if n])
             out.update(_measures(case["family"], case, info, incs, problem))
     except Exception as exc:  # noqa: BLE001  -- reported as an 'error' cell, never hidden
         import traceback

@@ -241,10 +241,12 @@ def run_sweeps(sweeps: list[Sweep], quick: bool, workers: int, rerun: bool) -> d
     todo, cached = [], {}
     for s in sweeps:
         path = DATA / f"{s.name}.json"
-        old = {} if rerun or not path.exists() else {
+        # --rerun reruns this mode's cases; the other cached cases stay in data/ (a
+        # --quick --rerun must not drop the full run's cases)
+        old = {} if not path.exists() else {
             _key(r["case"]): r for r in json.loads(path.read_text())}
         cached[s.name] = old
-        todo += [(s.name, c) for c in s.cases(quick) if _key(c) not in old]
+        todo += [(s.name, c) for c in s.cases(quick) if rerun or _key(c) not in old]
     print(f"{len(todo)} cases to run on {workers} worker(s)", flush=True)
     t0 = time.perf_counter()
     new: dict[str, list] = {s.name: [] for s in sweeps}
@@ -319,6 +321,8 @@ def cell_text(r: dict, accuracy: str) -> str:
         txt += "\n" + fmt(v)
     if r.get("warned"):
         txt += "*"
+    if r.get("detached"):
+        txt += f" off{r['detached']}"
     return txt
 
 
@@ -559,11 +563,12 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
         "",
         "Cell legend: `4.2 c3` = converged with 4.2 Newton iterations per converged increment on "
         "average and 3 cutbacks in the whole run (each cutback is a failed attempt of up to 30 "
-        "iterations; since the solver grows the increment back after an easy one, a size that "
-        "always fails is retried, and N can exceed the 5 levels); the second number is the "
+        "iterations; the solver grows the increment back after easy increments, so a size "
+        "that fails can be retried, and N can exceed the 5 levels); the second number is the "
         "accuracy measure "
         "named above each table; `*` = the run printed the penetration warning (overclosure "
-        "> 5 % of the slave spacing); **FAILED (t=...)** = an increment still failed after "
+        "> 5 % of the slave spacing); `offN` = the run warned that N slave nodes in contact "
+        "slid off the master surface (summed over increments); **FAILED (t=...)** = an increment still failed after "
         "5 successive halvings, `t` = the load-step time reached; **STALLED 1e-10 (t=...)** = "
         "failed the same way, but the last residual (here 1e-10) sits at the round-off floor: "
         "the iterate had converged and the stopping test could not see it; LOST = the solver "
