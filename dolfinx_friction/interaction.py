@@ -105,8 +105,8 @@ class ContactInteraction:
         self.history = FrictionState.zeros(n, gdim)
         self.in_contact = np.zeros(n, dtype=bool)  # had an element at the last commit
         self.closed = np.zeros(n, dtype=bool)  # closed (not open) at the last commit
-        self.lost = np.zeros(n, dtype=bool)  # lost its element at the last pairing
-        self.off_surface = np.zeros(n, dtype=bool)  # lost even after a fresh search
+        self.lost = np.zeros(n, dtype=bool)  # projected onto no candidate at the last pairing
+        self.off_surface = np.zeros(n, dtype=bool)  # lost even after a search, this increment
         self._gap_offset = np.zeros(0)  # ramp offset of the current elements' clearances
         self.cutoff = params.law.cutoff(slaves.area)
         self.initial_gap = np.zeros(n)  # negative clearances found at the first pairing (§3.4)
@@ -160,8 +160,8 @@ class ContactInteraction:
         """
         if self._slave_gather is None:
             self._slave_gather = NodeValues(u, self.slaves.nodes, self.gdim)
-        self.off_surface[:] = False
-        if update_areas:
+        if update_areas:  # the first search of an increment
+            self.off_surface[:] = False
             self.slaves.update_areas()
             self.cutoff = self.params.law.cutoff(self.slaves.area)
         n = len(self.slaves.nodes)
@@ -184,19 +184,23 @@ class ContactInteraction:
         """Pair every slave node with one of its candidate masters within the cutoff.
 
         A slave node takes the nearest face onto which it projects orthogonally.
-        Pairing has hysteresis: a node closed at the last commit (at the first
-        pairing of an increment), or with an element (later in the increment),
-        keeps an element even above the cutoff, and keeps its face while it
-        still projects onto it (up to :data:`FACE_SLACK` past its edges).  So
-        elements are dropped only at the first pairing of an increment, and only
-        from nodes that were open, however far a predictor has moved them.
-        Nodes that keep no element although they should are marked in :attr:`lost`.
+        Pairing has hysteresis: within an increment (``iteration > 0``) a node with
+        an element keeps one even above the cutoff, and keeps its face while it
+        still projects onto it (up to :data:`FACE_SLACK` past its edges); a node
+        that projects onto none of its candidates keeps the one it misses least
+        (and is marked :attr:`lost`, which asks for a new search).  So elements are
+        dropped only at the first pairing of an increment.  With a single pairing
+        per increment, nodes closed at the last commit also keep an element then,
+        however far the predictor has moved them.
         """
         cands = self.candidates
         u_s = self._slave_gather(u)
-        had = self.closed.copy()
+        n = len(self.slaves.nodes)
+        had = np.zeros(n, dtype=bool)  # must keep an element
         if iteration > 0:
             had[self.elements.slave] = True
+        elif self.pairing_iterations == 1:
+            had |= self.closed
         if self.rigid:
             kin = self.master.kinematics(self.slaves.X, u_s, self._gather(u)[0])
             chosen = np.flatnonzero((kin.g_N <= self.cutoff) | had)
@@ -211,27 +215,33 @@ class ContactInteraction:
         r = x_s[slave] - np.einsum("nk,nkd->nd", phi, x_f)
         m = surface_vector(np.einsum("nka,nkd->nad", dphi, x_f))
         g_N = np.einsum("nd,nd->n", r, m) / np.linalg.norm(m, axis=1)
-        previous = np.full(len(self.slaves.nodes), -1, dtype=np.int64)
+        previous = np.full(n, -1, dtype=np.int64)
         if iteration > 0:
             previous[self.elements.slave] = self.elements.face_id
         outside = np.where(proj.converged, face.distance_outside(proj.xi), np.inf)
+        near = np.zeros(n, dtype=bool)  # projects onto a candidate (up to EDGE_SLACK)
+        near[slave[outside <= EDGE_SLACK]] = True
+        expected = had | self.closed if iteration == 0 else had
+        self.lost = expected & ~near
         # preference: the current face (within FACE_SLACK), an interior projection, a near
-        # miss; then the smallest clearance, then the first reference centroid (TIE)
+        # miss, the least missed face of a lost node; then the smallest clearance, then the
+        # first reference centroid (TIE)
         rank = np.where(outside <= TIE, 1, 2)
         rank[(self._face_ids[cand] == previous[slave]) & (outside <= FACE_SLACK)] = 0
-        ok = np.flatnonzero((outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave]))
+        rank[outside > EDGE_SLACK] = 3
+        fallback = (self.lost & had)[slave] & np.isfinite(outside)
+        ok = np.flatnonzero(((outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave]))
+                            | fallback)
         unit = TIE * self.slaves.spacing[slave[ok]]
-        clearance = np.floor(np.abs(g_N[ok]) / unit)
+        clearance = np.floor(np.where(rank[ok] == 3, outside[ok] / TIE, np.abs(g_N[ok]) / unit))
         centroid = np.round(self._faces[1][cand[ok]].mean(axis=1) / (1e3 * unit[:, None]))
         order = ok[np.lexsort((*centroid.T[::-1], clearance, rank[ok], slave[ok]))]
         chosen = order[np.unique(slave[order], return_index=True)[1]]
         self._set_elements(chosen, proj.xi[chosen])
-        self.lost = had.copy()
-        self.lost[self.elements.slave] = False
 
     def needs_search(self) -> bool:
-        """Whether a node lost its element since the last search (then it may have slid
-        past all its candidate faces: a new search finds its face, or marks it
+        """Whether a node projects onto none of its candidates since the last search (it
+        may have slid past them all: a new search finds its face, or marks it
         :attr:`off_surface`).  Local: the caller reduces over ranks."""
         return bool((self.lost & ~self.off_surface).any())
 
@@ -340,11 +350,10 @@ class ContactInteraction:
         return float(np.max(-(r.g_N + self._gap_offset) / self.slaves.spacing[self.elements.slave]))
 
     def detached(self) -> int:
-        """Nodes on this rank that were closed at the last commit and now have no element:
-        they slid off the master surface (meaningful after convergence, before commit)."""
-        kept = np.zeros(len(self.closed), dtype=bool)
-        kept[self.elements.slave] = True
-        return int((self.closed & ~kept).sum())
+        """Nodes on this rank that were closed at the last commit and project onto no
+        master face even after a search in this increment: they slid off the master
+        surface (meaningful after convergence, before commit)."""
+        return int((self.closed & self.off_surface).sum())
 
 
 def _face_size(x_faces: np.ndarray) -> np.ndarray:
