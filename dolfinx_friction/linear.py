@@ -3,7 +3,7 @@
 The default solver is MUMPS (unsymmetric LU) with the factorisation kept
 (``reuse``): it preconditions GMRES for later Jacobians.  In small strain only the
 contact part, supported on the contact surface, changes between iterations, so a few
-Krylov iterations of back-solves replace a factorisation (1.6x faster at 67k dofs,
+Krylov iterations of back-solves replace a factorisation (1.46x faster at 67k dofs,
 same Newton iterations: benchmarks/RESULTS.md).  It is refactorised when the matrix
 pattern changes, and when GMRES does not converge within ``max_krylov`` iterations;
 then the next :data:`PAUSE` Jacobians are factorised afresh as well (a stiff contact
