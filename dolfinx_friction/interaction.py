@@ -85,10 +85,10 @@ FACE_SLACK = 1e-3
 #: takes the nearest face it misses by at most this parametric distance.
 EDGE_SLACK = 0.05
 #: Ties in pairing: a node this close (parametric) to a face's edge projects inside it,
-#: and clearances that differ by less than this times the node spacing are equal; ties
-#: go to the face whose reference centroid (to 1e3 TIE spacings) comes first (x, y, z).  So a node on
-#: an edge shared by two faces picks the same face whatever the partition (round-off and
-#: global face numbers differ between partitions).
+#: and clearances that differ by less than this times the node spacing are equal; ties go
+#: to the face whose reference centroid (rounded to 1e3 TIE spacings) comes first (x, y,
+#: z).  So a node on an edge shared by two faces picks the same face whatever the
+#: partition (round-off and global face numbers differ between partitions).
 TIE = 1e-9
 
 

@@ -24,7 +24,7 @@ from petsc4py import PETSc
 
 DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 REUSE = {"ksp_type": "gmres", "ksp_gmres_restart": 20, "ksp_rtol": 1e-12, "ksp_atol": 0.0,
-         "ksp_max_it": 20, "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+         "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}  # max_it: ``max_krylov``
 #: Jacobians factorised afresh after GMRES failed with a kept factorisation.
 PAUSE = 3
 #: Keep a factorisation only if it costs at least this many back-solves (in flops).
