@@ -87,6 +87,17 @@ def order3(residuals: list[float]) -> float:
     return math.log(e[-1] / e[-2]) / math.log(e[-2] / e[-3])
 
 
+def settling(changes: list[int]) -> int:
+    """Iterations up to and including the last one that changed the contact state."""
+    return max((k + 1 for k, c in enumerate(changes) if c), default=0)
+
+
+def iterations_to(residuals: list[float], e: float) -> int:
+    """First iteration with r <= e r0 (the last one if the increment converged above it)."""
+    return next((k for k, r in enumerate(residuals) if r <= e * residuals[0]),
+                len(residuals) - 1)
+
+
 def run_demo(name: str, tangent: str, quick: bool) -> dict:
     scene = demo_scene(name)
     row = {"demo": name, "tangent": tangent}
@@ -99,7 +110,9 @@ def run_demo(name: str, tangent: str, quick: bool) -> dict:
         return row
     incs = [{"step": i.step, "increment": i.increment, "t": i.t, "iterations": i.iterations,
              "residuals": [float(r) for r in i.residuals], "q": order(i.residuals),
-             "q3": order3(i.residuals),
+             "q3": order3(i.residuals), "changes": [a + b for a, b in zip(i.status_changes, i.face_changes)],
+             "face_only": [a == 0 < b for a, b in zip(i.status_changes, i.face_changes)],
+             "backtracks": list(i.backtracks),
              "active": i.active, "slipping": i.slipping} for i in result.increments]
     its = [i["iterations"] for i in incs]
     qs = [i["q"] for i in incs if math.isfinite(i["q"])]
@@ -201,8 +214,49 @@ def report(rows, machine, load_end, quick, figure, missing) -> str:
                        f"{r['demo']} {r['median_its']:g}" for r in ok)
                    + (" -- **met**." if med <= 3 else " -- **missed**."))
         out.append("")
+    if ok:
+        out += [where_iterations_go(ok), ""]
     out.append(f"Chart: `benchmarks/figures/{figure.name}` (r/r0 per iteration of one increment "
                "per demo: the one where the CalculiX tangent needs the most extra iterations).")
+    return "\n".join(out)
+
+
+def where_iterations_go(rows: list[dict]) -> str:
+    """Iterations per increment split into those that change the contact state (status
+    open/stick/slip or master face of some slave node) and the tail after the last change."""
+    med = lambda xs: f"{statistics.median(xs):g}"  # noqa: E731
+    table_rows, every = [], []
+    for r in rows:
+        incs = r["increments_data"]
+        every += incs
+        settle = [settling(i["changes"]) for i in incs]
+        tail = [i["iterations"] - s for i, s in zip(incs, settle)]
+        late = sum(s > 1 for s in settle)
+        changing = [f for i, s in zip(incs, settle) for f in i["face_only"][:s]]
+        table_rows.append([
+            r["demo"], len(incs), med([i["iterations"] for i in incs]), med(settle), med(tail),
+            f"{100 * late / len(incs):.0f}", f"{100 * np.mean(changing) if changing else 0:.0f}",
+            f"{np.mean([sum(i['backtracks']) for i in incs]):.2f}"]
+            + [med([iterations_to(i["residuals"], e) for i in incs]) for e in (1e-3, 1e-6)])
+    out = ["Where the iterations go (exact tangent): 'changing' = iterations up to the last one "
+           "that changed the contact state of some slave node (open/stick/slip status or master "
+           "face); 'tail' = the iterations after it, with the state of the converged increment "
+           "already found; 'later changes' = increments whose state still changed after the "
+           "first iteration; 'face only' = share of the changing iterations in which no status "
+           "changed, only master faces (faceted masters); halvings = line-search backtracks "
+           "per increment; the last two columns: "
+           "iterations until r <= 1e-3 r0 and 1e-6 r0 (the default tolerance is 1e-9 r0).",
+           "",
+           B.table(["demo", "increments", "median its", "median changing", "median tail",
+                    "later changes [%]", "face only [%]", "halvings/inc", "its to 1e-3 r0",
+                    "its to 1e-6 r0"], table_rows, "lrrrrrrrrr"),
+           ""]
+    settle = [settling(i["changes"]) for i in every]
+    tail = [i["iterations"] - s for i, s in zip(every, settle)]
+    to_1e6 = med([iterations_to(i["residuals"], 1e-6) for i in every])
+    out.append(f"All {len(every)} increments: median {med([i['iterations'] for i in every])} "
+               f"iterations = median {med(settle)} changing the contact state + median "
+               f"{med(tail)} after the last change; median {to_1e6} to 1e-6 r0.")
     return "\n".join(out)
 
 

@@ -333,6 +333,16 @@ class ContactInteraction:
     def restore(self, saved: tuple) -> None:
         self.history, self.in_contact, self.closed = (a.copy() for a in saved)
 
+    def contact_state(self) -> np.ndarray:
+        """(n, 2): status and master face id of every slave node on this rank ((-1, -1)
+        without an element; face -1 on a rigid master)."""
+        state = np.full((len(self.slaves.nodes), 2), -1, dtype=np.int64)
+        el = self.elements
+        if el.result is not None:
+            state[el.slave, 0] = el.result.status
+            state[el.slave, 1] = el.face_id
+        return state
+
     def counts(self) -> tuple[int, int]:
         """Slave nodes in contact (closed) and in slip, on this rank."""
         r = self.elements.result

@@ -31,6 +31,23 @@ class ConvergenceError(RuntimeError):
 
 
 @dataclass
+class NewtonTrace:
+    """Per-iteration record of one Newton solve: ``residuals[k]`` is the residual norm at
+    iterate k; in iteration k + 1, ``status_changes[k]`` slave nodes changed their contact
+    status (open, stick, slip), ``face_changes[k]`` others only their master face, and the
+    line search halved the step ``backtracks[k]`` times."""
+
+    residuals: list[float] = field(default_factory=list)
+    status_changes: list[int] = field(default_factory=list)
+    face_changes: list[int] = field(default_factory=list)
+    backtracks: list[int] = field(default_factory=list)
+
+    @property
+    def iterations(self) -> int:
+        return len(self.backtracks)
+
+
+@dataclass
 class Increment:
     """A converged increment, as reported to observers."""
 
@@ -41,6 +58,9 @@ class Increment:
     iterations: int
     residual: float
     residuals: list[float]
+    status_changes: list[int]  # per iteration: slave nodes whose contact status changed
+    face_changes: list[int]  # per iteration: other slave nodes whose master face changed
+    backtracks: list[int]  # per iteration: line-search halvings
     active: int
     slipping: int
     wall: float
@@ -238,8 +258,8 @@ class Solver:
                 saved = self._save()
                 if rate is not None:
                     self.problem.u.axpy(dtau, rate)
-                ok, iters, residuals = self._newton(step, loading, tau + dtau)
-                summary.newton_iterations += iters
+                ok, trace = self._newton(step, loading, tau + dtau)
+                summary.newton_iterations += trace.iterations
                 if not ok:
                     self._restore(saved)
                     size.failed()
@@ -248,18 +268,18 @@ class Solver:
                         reason = (f"step {index} ({step.name!r}), increment {number + 1} at "
                                   f"t = {index + tau:.6g}: Newton did not converge after "
                                   f"{step.max_cutbacks} cutbacks (last residual "
-                                  f"{residuals[-1]:.3e})")
+                                  f"{trace.residuals[-1]:.3e})")
                         summary.failure = reason
                         summary.wall = time.perf_counter() - start
                         raise ConvergenceError(reason)
                     continue
                 tau += dtau
                 number += 1
-                size.converged(iters)
+                size.converged(trace.iterations)
                 rate = rate or self.problem.u.duplicate()
                 rate.waxpy(-1.0, self.u_n, self.problem.u)
                 rate.scale(1.0 / dtau)
-                report = self._report(index, step.name, number, index + tau, iters, residuals,
+                report = self._report(index, step.name, number, index + tau, trace,
                                       time.perf_counter() - start)
                 for inter in self.problem.interactions:
                     inter.commit()
@@ -281,44 +301,61 @@ class Solver:
             inter.restore(s)
 
     # ------------------------------------------------------------ Newton
-    def _newton(self, step, loading: _Loading, tau: float) -> tuple[bool, int, list[float]]:
+    def _newton(self, step, loading: _Loading, tau: float) -> tuple[bool, NewtonTrace]:
         p = self.problem
         values, self.f_ext = loading.at(tau)
         self._ramp = (1.0 - tau) if loading.first else 0.0
         u_local = p.u.getArray()
         u_local[loading.rows] = values
         p.u.setArray(u_local)
-        residuals: list[float] = []
+        trace = NewtonTrace()
+        state = None
         for it in range(step.max_iterations + 1):
             norm = self._assemble(it, loading.rows)
-            residuals.append(norm)
+            trace.residuals.append(norm)
+            if state is not None:
+                self._record_changes(state, trace)
+            state = [inter.contact_state() for inter in p.interactions]
             if not np.isfinite(norm):
-                return False, it, residuals
-            target = max(step.newton_rtol * residuals[0], step.newton_atol)
+                return False, trace
+            target = max(step.newton_rtol * trace.residuals[0], step.newton_atol)
             if norm <= max(target, self._floor):
-                return True, it, residuals
+                return True, trace
             if it == step.max_iterations:
-                return False, it, residuals
+                return False, trace
             t0 = time.perf_counter()
             solved = self.linear.solve(self._J, self.R, self.du)
             self.timers.add("linear_solve", time.perf_counter() - t0)
             if not solved:
-                return False, it + 1, residuals
+                trace.backtracks.append(0)
+                return False, trace
             p.u.axpy(-1.0, self.du)
-            if step.line_search:
-                self._line_search(it, loading.rows, norm, target)
-        return False, step.max_iterations, residuals
+            trace.backtracks.append(self._line_search(it, loading.rows, norm, target)
+                                    if step.line_search else 0)
+        return False, trace
 
-    def _line_search(self, it: int, rows: np.ndarray, norm0: float, target: float) -> None:
+    def _record_changes(self, before: list[np.ndarray], trace: NewtonTrace) -> None:
+        """Count (all ranks) the slave nodes whose status, or else only master face, differs
+        from ``before``."""
+        counts = np.zeros(2, dtype=np.int64)
+        for inter, old in zip(self.problem.interactions, before):
+            differs = inter.contact_state() != old
+            counts += differs[:, 0].sum(), (differs[:, 1] & ~differs[:, 0]).sum()
+        status, face = self.comm.allreduce(counts)
+        trace.status_changes.append(int(status))
+        trace.face_changes.append(int(face))
+
+    def _line_search(self, it: int, rows: np.ndarray, norm0: float, target: float) -> int:
         """Backtrack along the Newton step while the residual norm does not decrease (and
-        is not converged: at round-off it need not decrease)."""
+        is not converged: at round-off it need not decrease); returns the halvings."""
         alpha = 1.0
-        for _ in range(5):
+        for halvings in range(5):
             norm = self._assemble(it, rows, jacobian=False)
             if norm <= max((1.0 - 1e-4 * alpha) * norm0, target, self._floor):
-                return
+                return halvings
             alpha *= 0.5
             self.problem.u.axpy(alpha, self.du)  # back from u - 2 alpha du to u - alpha du
+        return 5
 
     def _assemble(self, it: int, bc_rows: np.ndarray, jacobian: bool = True) -> float:
         """Residual (and Jacobian) at the current iterate; returns the residual norm."""
@@ -411,7 +448,7 @@ class Solver:
         self._pattern.fill(self._J, data)
 
     # ----------------------------------------------------------- reports
-    def _report(self, index, name, number, t, iters, residuals, wall) -> Increment:
+    def _report(self, index, name, number, t, trace: NewtonTrace, wall) -> Increment:
         p, comm = self.problem, self.comm
         internal = self._internal
         # internal minus external force at a node: the force its constraint exerts on the body
@@ -430,8 +467,10 @@ class Solver:
         penetration = {i.name: comm.allreduce(i.penetration(), op=MPI.MAX)
                        for i in p.interactions}
         detached = {i.name: comm.allreduce(i.detached()) for i in p.interactions}
-        return Increment(index, name, number, t, iters, residuals[-1], residuals, active,
-                         slipping, wall, reactions, rigid_u, rigid_f, penetration, detached)
+        return Increment(index, name, number, t, trace.iterations, trace.residuals[-1],
+                         trace.residuals, trace.status_changes, trace.face_changes,
+                         trace.backtracks, active, slipping,
+                         wall, reactions, rigid_u, rigid_f, penetration, detached)
 
 
 def _absolute(A: PETSc.Mat) -> PETSc.Mat:
