@@ -45,6 +45,7 @@ class CooPattern:
     ``blocks`` is a list of ``(rows, cols)`` global index arrays, e.g. the bulk
     stiffness and the contact elements; :meth:`gather_values` turns the values
     of one block into CSR data, so a constant block is summed only once.
+    :meth:`extended` adds blocks to a pattern without sorting its entries again.
     """
 
     def __init__(self, comm: MPI.Comm, n_owned: int, blocks: list[tuple[np.ndarray, np.ndarray]]):
@@ -52,14 +53,8 @@ class CooPattern:
         ends = ownership_ends(comm, n_owned)
         self.n_owned, self.n_global = n_owned, int(ends[-1])
         self.start = int(ends[comm.rank] - n_owned)
-        self._blocks, keys = [], []
-        for rows, cols in blocks:
-            rows = np.asarray(rows, dtype=np.int64).ravel()
-            block = _Block(comm, ends, rows)
-            mine_rows = block.exchange(comm, rows, np.int64)
-            mine_cols = block.exchange(comm, np.asarray(cols, dtype=np.int64).ravel(), np.int64)
-            keys.append((mine_rows - self.start) * self.n_global + mine_cols)
-            self._blocks.append(block)
+        self._ends = ends
+        self._blocks, keys = self._receive(blocks)
         diag = np.arange(self.start, self.start + n_owned, dtype=np.int64)
         keys.append((diag - self.start) * self.n_global + diag)
         unique, inverse = np.unique(np.concatenate(keys), return_inverse=True)
@@ -67,11 +62,68 @@ class CooPattern:
         for k, block in enumerate(self._blocks):
             block.slots = inverse[bounds[k]:bounds[k + 1]]
         self.diagonal_slots = inverse[bounds[-2]:]
+        self._set_keys(unique)
+
+    def _receive(self, blocks) -> tuple[list[_Block], list[np.ndarray]]:
+        """Send each block's entries to their rows' owners; the blocks and the received keys
+        ``local row * n_global + col``."""
+        out, keys = [], []
+        for rows, cols in blocks:
+            rows = np.asarray(rows, dtype=np.int64).ravel()
+            block = _Block(self.comm, self._ends, rows)
+            mine_rows = block.exchange(self.comm, rows, np.int64)
+            mine_cols = block.exchange(self.comm, np.asarray(cols, dtype=np.int64).ravel(),
+                                       np.int64)
+            keys.append((mine_rows - self.start) * self.n_global + mine_cols)
+            out.append(block)
+        return out, keys
+
+    def _set_keys(self, unique: np.ndarray) -> None:
+        """The compressed rows of the sorted unique keys."""
+        self._keys = unique
         self.nnz = len(unique)
         self._row_of_slot = unique // self.n_global
-        counts = np.bincount(self._row_of_slot, minlength=n_owned)
+        counts = np.bincount(self._row_of_slot, minlength=self.n_owned)
         self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType)
         self.indices = (unique % self.n_global).astype(PETSc.IntType)
+
+    def extended(self, blocks: list[tuple[np.ndarray, np.ndarray]]) -> "CooPattern":
+        """This pattern plus the entries of more blocks (collective).
+
+        The result's blocks are the new ones only; :meth:`from_base` moves CSR data of
+        this pattern into its layout.  Costs a few passes over this pattern's entries
+        instead of sorting them again (the bulk stiffness, when the contact couplings
+        change).
+        """
+        new = object.__new__(CooPattern)
+        new.comm, new.n_owned, new.n_global = self.comm, self.n_owned, self.n_global
+        new.start, new._ends = self.start, self._ends
+        new._blocks, keys = new._receive(blocks)
+        extra, inverse = np.unique(np.concatenate(keys + [np.zeros(0, np.int64)]),
+                                   return_inverse=True)
+        base = self._keys
+        at = np.searchsorted(base, extra)
+        known = at < len(base)
+        known[known] = base[at[known]] == extra[known]
+        added, where = extra[~known], at[~known]
+        # base slot i moves up by the number of added keys that sort before it
+        new.base_slots = np.arange(len(base)) + np.cumsum(
+            np.bincount(where, minlength=len(base) + 1))[:len(base)]
+        slot_of_extra = np.empty(len(extra), dtype=np.int64)
+        slot_of_extra[known] = new.base_slots[at[known]]
+        slot_of_extra[~known] = where + np.arange(len(added))
+        bounds = np.cumsum([0] + [len(k) for k in keys])
+        for k, block in enumerate(new._blocks):
+            block.slots = slot_of_extra[inverse[bounds[k]:bounds[k + 1]]]
+        new.diagonal_slots = new.base_slots[self.diagonal_slots]
+        new._set_keys(np.insert(base, where, added))
+        return new
+
+    def from_base(self, data: np.ndarray) -> np.ndarray:
+        """CSR data of the pattern this one extends, in this pattern's layout."""
+        out = np.zeros(self.nnz)
+        out[self.base_slots] = data
+        return out
 
     def gather_values(self, block: int, values: np.ndarray) -> np.ndarray:
         """CSR data holding the sum of one block's values (given in its constructor order)."""

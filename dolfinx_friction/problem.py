@@ -66,12 +66,11 @@ class ContactProblem:
         self.u = PETSc.Vec().createMPI((n_local, PETSc.DETERMINE), comm=comm)
         self.u.set(0.0)
         entries = [bulk.stiffness_entries(f, self.layout) for f in self.fields]
-        self.bulk_rows = np.concatenate([e[0] for e in entries]).astype(np.int64)
-        self.bulk_cols = np.concatenate([e[1] for e in entries]).astype(np.int64)
-        self.bulk_vals = np.concatenate([e[2] for e in entries])
-        pattern = CooPattern(comm, n_local, [(self.bulk_rows, self.bulk_cols)])
-        self.K_bulk = pattern.create_matrix()
-        pattern.fill(self.K_bulk, pattern.gather_values(0, self.bulk_vals))
+        rows, cols, vals = (np.concatenate([e[k] for e in entries]) for k in range(3))
+        self.bulk_pattern = CooPattern(comm, n_local, [(rows, cols)])
+        self.bulk_data = self.bulk_pattern.gather_values(0, vals)  # CSR values
+        self.K_bulk = self.bulk_pattern.create_matrix()
+        self.bulk_pattern.fill(self.K_bulk, self.bulk_data)
         self.interactions = [self._interaction(k, c) for k, c in enumerate(scene.contacts)]
 
     # ------------------------------------------------------------ lookups

@@ -431,14 +431,13 @@ class Solver:
                                   + [np.zeros(0, np.int64)])
             cols = np.concatenate([np.tile(x, (1, x.shape[1])).ravel() for x in dofs]
                                   + [np.zeros(0, np.int64)])
-            self._pattern = CooPattern(self.comm, p.layout.n_owned * self.gdim,
-                                       [(p.bulk_rows, p.bulk_cols), (rows, cols)])
-            self._bulk_data = self._pattern.gather_values(0, p.bulk_vals)
+            self._pattern = p.bulk_pattern.extended([(rows, cols)])
+            self._bulk_data = self._pattern.from_base(p.bulk_data)
             if self._J is not None:
                 self._J.destroy()
             self._J = self._pattern.create_matrix()
             self._pairs = [a.copy() for a in pairs]
-        data = self._bulk_data + self._pattern.gather_values(1, vals)
+        data = self._bulk_data + self._pattern.gather_values(0, vals)
         data[self._pattern.row_slots(bc_rows)] = 0.0
         data[self._pattern.diagonal_slots[bc_rows]] = 1.0
         # A force-controlled obstacle may have no stiffness along some axis (a frictionless

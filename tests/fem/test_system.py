@@ -15,19 +15,30 @@ from dolfinx_friction.surfaces import SlaveNodes, master_faces
 from tests import meshes
 
 
-def test_coo_pattern_sums_blocks_like_a_dense_matrix(comm):
+@pytest.mark.parametrize("extended", [False, True])
+def test_coo_pattern_sums_blocks_like_a_dense_matrix(comm, extended):
+    """Two blocks in one pattern, or the second added to the first's pattern (extended)."""
     rng = np.random.default_rng(comm.rank)
     n_owned = 5 + comm.rank
     N = comm.allreduce(n_owned)
     blocks = [(rng.integers(0, N, 50), rng.integers(0, N, 50)) for _ in range(2)]
     values = [rng.standard_normal(50) for _ in range(2)]
-    pattern = CooPattern(comm, n_owned, blocks)
+    if extended:
+        base = CooPattern(comm, n_owned, blocks[:1])
+        pattern = base.extended(blocks[1:])
+        data = (pattern.from_base(base.gather_values(0, values[0]))
+                + pattern.gather_values(0, values[1]))
+        assert pattern.nnz == CooPattern(comm, n_owned, blocks).nnz
+    else:
+        pattern = CooPattern(comm, n_owned, blocks)
+        data = pattern.gather_values(0, values[0]) + pattern.gather_values(1, values[1])
+    data[pattern.diagonal_slots] += 100.0  # every owned diagonal has its slot
     A = pattern.create_matrix()
-    pattern.fill(A, pattern.gather_values(0, values[0]) + pattern.gather_values(1, values[1]))
+    pattern.fill(A, data)
     dense = np.zeros((N, N))
     for (rows, cols), vals in zip(blocks, values):
         np.add.at(dense, (rows, cols), vals)
-    dense = comm.allreduce(dense)
+    dense = comm.allreduce(dense) + 100.0 * np.eye(N)
     start, end = A.getOwnershipRange()
     indptr, indices, data = A.getValuesCSR()
     mine = np.zeros((end - start, N))
