@@ -19,8 +19,8 @@ options database):
   independent linear bodies: 1 Newton iteration per increment);
 * beyond the sizes MUMPS handles here, ``contact`` and ``no contact`` with
   ``petsc_options = {ksp_type: gmres, pc_type: gamg, ksp_rtol: 1e-10, ksp_max_it: 1000,
-  ksp_gmres_restart: 200}`` (PETSc's GAMG defaults otherwise; no near null space and no block
-  size: the solver API has no hook for them).
+  ksp_gmres_restart: 200}`` (PETSc's GAMG defaults otherwise; the Jacobian carries the block
+  size and the rigid-body modes as near null space).
 
 Reported per iteration (phase seconds / Newton iterations = linear solves): contact search,
 contact assembly (element evaluation, residual and Jacobian fill), bulk assembly (K u),

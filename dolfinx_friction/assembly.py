@@ -137,9 +137,10 @@ class CooPattern:
         mask[local_rows] = True
         return np.flatnonzero(mask[self._row_of_slot])
 
-    def create_matrix(self) -> PETSc.Mat:
+    def create_matrix(self, block_size: int = 1) -> PETSc.Mat:
         size = ((self.n_owned, self.n_global), (self.n_owned, self.n_global))
-        A = PETSc.Mat().createAIJ(size, csr=(self.indptr, self.indices), comm=self.comm)
+        A = PETSc.Mat().createAIJ(size, bsize=block_size, csr=(self.indptr, self.indices),
+                                  comm=self.comm)
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
         return A
 

@@ -143,6 +143,29 @@ class ContactProblem:
         node = self.rigid_node(name) - self.layout.start
         return (node * self.gdim + np.arange(self.gdim))[None]
 
+    def rigid_body_modes(self) -> PETSc.NullSpace:
+        """Translations and rotations of all bodies together, orthonormal (collective): the
+        near null space that algebraic multigrid (GAMG) needs for elasticity.  Each body
+        gets the rigid motions of its own nodes; a rigid obstacle only translates."""
+        d = self.gdim
+        modes = [self.u.duplicate() for _ in range(3 if d == 2 else 6)]
+        values = np.zeros((len(modes), self.u.getLocalSize() // d, d))
+        for f in self.fields:
+            nodes = slice(int(self.layout.block_offsets[f.block]),
+                          int(self.layout.block_offsets[f.block + 1]))
+            x = f.X[: f.n_owned]
+            values[:d, nodes] = np.eye(d)[:, None, :]
+            for k, (i, j) in enumerate([(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]):
+                values[d + k, nodes, i], values[d + k, nodes, j] = -x[:, j], x[:, i]
+        for r in self.scene.rigids:
+            values[:d, self.rigid_dofs(r.name)[:, 0] // d] = np.eye(d)[:, None, :]
+        for k, mode in enumerate(modes):  # modified Gram-Schmidt
+            mode.setArray(values[k].ravel())
+            for previous in modes[:k]:
+                mode.axpy(-mode.dot(previous), previous)
+            mode.scale(1.0 / mode.norm())
+        return PETSc.NullSpace().create(vectors=modes, comm=self.comm)
+
     # ------------------------------------------------------------- contact
     def _interaction(self, k: int, pair: ContactPair) -> ContactInteraction:
         slave_field = self.group_fields(pair.slave)[0]

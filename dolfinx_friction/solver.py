@@ -141,6 +141,7 @@ class Solver:
         self.S = p.u.duplicate()  # round-off scale of the residual's rows
         self._abs_u = p.u.duplicate()
         self._K_abs = _absolute(p.K_bulk)
+        self._modes = p.rigid_body_modes()
         self.du = p.u.duplicate()
         self.f_ext = np.zeros(p.layout.n_owned * self.gdim)
         self._pattern: Optional[CooPattern] = None
@@ -435,7 +436,8 @@ class Solver:
             self._bulk_data = self._pattern.from_base(p.bulk_data)
             if self._J is not None:
                 self._J.destroy()
-            self._J = self._pattern.create_matrix()
+            self._J = self._pattern.create_matrix(self.gdim)
+            self._J.setNearNullSpace(self._modes)  # for multigrid; direct solvers ignore it
             self._pairs = [a.copy() for a in pairs]
         data = self._bulk_data + self._pattern.gather_values(0, vals)
         data[self._pattern.row_slots(bc_rows)] = 0.0

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from dolfinx_friction.api import run
 from dolfinx_friction.assembly import CooPattern
@@ -84,6 +85,37 @@ def test_global_jacobian_matches_finite_differences(shared_dir, mu):
     fd = (residuals[0] - residuals[1]) / (2 * h)
     error = (fd - Jv).norm() / Jv.norm()
     assert error < 1e-8, error  # measured 1.8e-10 (mu = 0.3)
+
+
+def test_rigid_body_modes_span_the_kernel_of_the_bulk_stiffness(shared_dir):
+    """The near null space given to multigrid: orthonormal, and K_bulk maps each mode to
+    round-off (both bodies at once; the rigid-obstacle scene adds a translating node)."""
+    mesh = meshes.two_boxes(shared_dir / "boxes.msh")
+    problem = ContactProblem(_boxes_scene(mesh))
+    modes = problem.rigid_body_modes().getVecs()
+    assert len(modes) == 6
+    gram = np.array([[a.dot(b) for b in modes] for a in modes])
+    np.testing.assert_allclose(gram, np.eye(6), atol=1e-12)
+    K = problem.K_bulk
+    Km = modes[0].duplicate()
+    for m in modes:
+        K.mult(m, Km)
+        assert Km.norm() < 1e-12 * K.norm(PETSc.NormType.INFINITY), Km.norm()
+
+
+def test_iterative_solver_gives_the_direct_answer(shared_dir):
+    """GMRES + GAMG (near null space and block size from the solver) reaches the reactions of
+    the default MUMPS run."""
+    mesh = meshes.two_boxes(shared_dir / "boxes.msh")
+    scene = _boxes_scene(mesh, mu=0.3)
+    direct = run(scene, write=False)
+    gamg = run(scene, write=False, petsc_options={
+        "ksp_type": "gmres", "pc_type": "gamg", "ksp_rtol": 1e-12, "ksp_max_it": 500})
+    for a, b in zip(gamg.increments, direct.increments):
+        R = np.abs(b.reactions["block_top"]).max()
+        np.testing.assert_allclose(a.reactions["block_top"], b.reactions["block_top"],
+                                   atol=1e-7 * R)
+    assert [i.iterations for i in gamg.increments] == [i.iterations for i in direct.increments]
 
 
 def test_slave_areas_sum_to_the_surface_area(shared_dir):
