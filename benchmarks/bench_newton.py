@@ -153,6 +153,10 @@ def chart(rows: list[dict], machine: dict) -> Path:
             q = inc["q"]
             ax.semilogy(range(len(r)), np.maximum(r / r[0], 1e-17), style, ms=4,
                         label=f"{t}: {inc['iterations']} its, q = {q:.2f}, q3 = {inc['q3']:.2f}")
+            changed = [k + 1 for k, c in enumerate(inc["changes"]) if c]
+            ax.semilogy(changed, np.maximum(r[changed] / r[0], 1e-17), "o", ms=9, mfc="none",
+                        color="C3" if t == "consistent" else "C1", lw=0,
+                        label=f"{t}: contact state changed" if changed else None)
         ax.axhline(1e-9, color="grey", lw=0.8, ls=":")
         inc = keys["consistent"][pick]
         ax.set_title(f"{demo}: step {inc['step']}, increment {inc['increment']} "
@@ -161,7 +165,8 @@ def chart(rows: list[dict], machine: dict) -> Path:
         ax.set_ylabel("r / r0")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle(f"Residual history, exact vs CalculiX tangent (tolerance 1e-9 r0, dotted); "
+    fig.suptitle(f"Residual history, exact vs CalculiX tangent (tolerance 1e-9 r0, dotted; "
+                 "rings: iterations that changed the contact state); "
                  f"load {machine['load'][0]:.1f} on {machine['nproc']} cores", fontsize=10)
     fig.tight_layout()
     path = B.FIGURES / "newton_residuals.png"
