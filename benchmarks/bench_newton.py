@@ -259,9 +259,16 @@ def where_iterations_go(rows: list[dict]) -> str:
     settle = [settling(i["changes"]) for i in every]
     tail = [i["iterations"] - s for i, s in zip(every, settle)]
     to_1e6 = med([iterations_to(i["residuals"], 1e-6) for i in every])
+    late = 100 * np.mean([s > 1 for s in settle])
     out.append(f"All {len(every)} increments: median {med([i['iterations'] for i in every])} "
                f"iterations = median {med(settle)} changing the contact state + median "
-               f"{med(tail)} after the last change; median {to_1e6} to 1e-6 r0.")
+               f"{med(tail)} after the last change; median {to_1e6} to 1e-6 r0.  In "
+               f"{late:.0f} % of the increments the contact state still changes after the "
+               "first iteration (nodes entering or leaving the contact zone, stick/slip at "
+               "its edge, face switches on faceted masters); each change costs an iteration "
+               "that only finds the state, often with line-search halvings.  A median of 3 "
+               "at 1e-9 r0 would need the state right after the first iteration and a "
+               "two-iteration tail in most increments.")
     return "\n".join(out)
 
 
