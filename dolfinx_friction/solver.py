@@ -261,6 +261,8 @@ class Solver:
                     self.problem.u.axpy(dtau, rate)
                 ok, trace = self._newton(step, loading, tau + dtau)
                 summary.newton_iterations += trace.iterations
+                if ok and size.level < step.max_cutbacks and self._contact_vanished():
+                    ok = False  # too coarse to tell a slide off the master from a lost contact
                 if not ok:
                     self._restore(saved)
                     size.failed()
@@ -290,6 +292,19 @@ class Solver:
         summary.converged = True
         summary.wall = time.perf_counter() - start
         return summary
+
+    def _contact_vanished(self) -> bool:
+        """Whether a pair that had closed nodes at the last commit has none, with some of
+        them slid off the master surface (collective).  A whole contact zone leaving the
+        master in one increment is more often a diverging iterate that threw it away than
+        a real slide off the end: the increment is cut back, and accepted (with the warning)
+        only at the last cutback level."""
+        for inter in self.problem.interactions:
+            before, now, off = self.comm.allreduce(
+                np.array([inter.closed.sum(), inter.counts()[0], inter.detached()]))
+            if before > 0 and now == 0 and off > 0:
+                return True
+        return False
 
     def _save(self):
         self.problem.u.copy(self.u_n)

@@ -20,13 +20,15 @@
   overclosure being ramped out raises no penetration warning; pairing once per increment
   after a rate predictor keeps the contact; a node that slides past all its candidate
   faces within one increment is searched for again, and one that slides off the master
-  surface is reported; a size that keeps failing is not retried after every easy increment.
+  surface is reported; a size that keeps failing is not retried after every easy increment;
+  an increment in which a whole contact zone slides off the master is cut back.
 
 All scenes are small meshes (2D but one); every test runs serially and under ``mpirun -n 2``.
 """
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import gmsh
 import numpy as np
@@ -38,6 +40,8 @@ from dolfinx_friction.model import (BC, Body, ContactPair, Output, Rigid, RigidM
                                     Step)
 from dolfinx_friction.solver import ConvergenceError
 from tests import meshes
+
+DEMOS = Path(__file__).resolve().parents[2] / "demos"
 
 E, NU = 1000.0, 0.3
 
@@ -342,3 +346,43 @@ def test_regrowth_does_not_retry_a_failing_size(shared_dir):
     result = run(scene, write=False)
     assert result.summary.converged
     assert 1 <= result.summary.cutbacks <= 8
+
+
+def _coarse_ironing(path) -> Path:
+    """The ironing demo's mesh, coarse (40 x 8 block elements, 16 on the die's arc), as the
+    stability maps use it."""
+    import importlib
+    import sys
+    if MPI.COMM_WORLD.rank == 0 and not path.exists():
+        sys.path.insert(0, str(DEMOS))  # the demo imports its helpers (_meshing, _common)
+        try:
+            importlib.import_module("ironing").build_mesh(path, nx=40, ny=8, n_arc=16)
+        finally:
+            sys.path.remove(str(DEMOS))
+    MPI.COMM_WORLD.barrier()
+    return path
+
+
+def test_contact_zone_lost_in_one_increment_is_cut_back(shared_dir):
+    """Coarse ironing, mu = 1, K = stick slope = 10 E/h, half a die element of drag per
+    increment, plain Newton (the maps' ironing_stick_mu cell): diverging iterates threw the
+    whole contact zone off the die, and two drag increments were accepted with no node in
+    contact and no die force (LOST).  An increment that loses a whole contact zone by
+    sliding off the master is now cut back; every drag increment keeps its contact."""
+    from dataclasses import replace
+
+    from dolfinx_friction.scene import load_scene
+    base = load_scene(DEMOS / "ironing.toml")
+    h, E_block = 20.0 / 40, 10.0
+    pair = replace(base.contacts[0], K=10 * E_block / h, stick_slope=10 * E_block / h, mu=1.0)
+    kw = dict(max_cutbacks=5, max_iterations=30, line_search=False)
+    press, drag = base.steps
+    drag_bcs = tuple(replace(b, u=(4.0, *b.u[1:])) if b.on == "die_top" else b
+                     for b in drag.bcs)
+    scene = replace(base, mesh=_coarse_ironing(shared_dir / "ironing_coarse.msh"),
+                    contacts=(pair,), output=Output(fields=False, contact_table=False),
+                    steps=(replace(press, **kw),
+                           replace(drag, bcs=drag_bcs, increments=20, **kw)))
+    result = run(scene, write=False, quiet=True)
+    assert result.summary.converged and result.summary.cutbacks > 0
+    assert all(inc.active > 0 for inc in result.increments)
