@@ -179,6 +179,11 @@ def chart(rows: list[dict], machine: dict) -> Path:
         if pts:
             pts.sort()
             ax.semilogx(*zip(*pts), marker=marker, label=f"contact overhead ({solver})")
+    kept = sorted((r["dofs"], per_iteration(r)["total"]
+                   / per_iteration(_match(rows, r["n"], False, "mumps"))["total"])
+                  for r in rows if r["ok"] and r["reuse"] and _match(rows, r["n"], False, "mumps"))
+    if kept:
+        ax.semilogx(*zip(*kept), marker="D", label="contact overhead (mumps, kept factorisation)")
     reuse_pts = []
     for r in rows:
         if r["ok"] and r["reuse"]:
