@@ -14,7 +14,9 @@ factorise in milliseconds and are factorised every time.  A fresh factorisation 
 plain direct solve.  Every decision depends on counts, never on timings: runs are
 repeatable.
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
-default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.
+default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
+LU factorisation is kept (``reuse`` is ignored for other preconditioners); one by a
+solver other than MUMPS is kept whatever it cost.
 """
 from __future__ import annotations
 
@@ -45,7 +47,10 @@ class LinearSolver:
         self.ksp = PETSc.KSP().create(comm)
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setFromOptions()
-        self.reuse, self.max_krylov = reuse, max_krylov
+        pc = self.ksp.getPC()
+        # only a factorisation is kept; only MUMPS reports what it cost
+        self.reuse, self.max_krylov = reuse and pc.getType() == "lu", max_krylov
+        self._counted = self.reuse and pc.getFactorSolverType() == "mumps"
         self._factored: Optional[PETSc.Mat] = None
         self._paused = 0  # Jacobians still to factorise afresh
         self._pays = False  # the last factorisation is worth keeping
@@ -73,7 +78,8 @@ class LinearSolver:
         if not keep:
             self.factorisations += 1
             self._factored = J
-            self._pays = self.reuse and _payback(self.ksp.getPC().getFactorMatrix()) >= PAYBACK
+            self._pays = self.reuse and (not self._counted or _payback(
+                self.ksp.getPC().getFactorMatrix()) >= PAYBACK)
         self.krylov_iterations += self.ksp.getIterationNumber()
         return self.ksp.getConvergedReason() > 0
 

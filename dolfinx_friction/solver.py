@@ -145,6 +145,7 @@ class Solver:
         self.du = p.u.duplicate()
         self.f_ext = np.zeros(p.layout.n_owned * self.gdim)
         self._pattern: Optional[CooPattern] = None
+        self._bc_slots: Optional[tuple] = None  # (bc rows, their slots in the pattern)
         self._pairs: list = []
         self._J: Optional[PETSc.Mat] = None
         self._bc_state: dict[str, tuple] = {}
@@ -454,8 +455,11 @@ class Solver:
             self._J = self._pattern.create_matrix(self.gdim)
             self._J.setNearNullSpace(self._modes)  # for multigrid; direct solvers ignore it
             self._pairs = [a.copy() for a in pairs]
+            self._bc_slots = None
+        if self._bc_slots is None or self._bc_slots[0] is not bc_rows:  # new pattern or step
+            self._bc_slots = (bc_rows, self._pattern.row_slots(bc_rows))
         data = self._bulk_data + self._pattern.gather_values(0, vals)
-        data[self._pattern.row_slots(bc_rows)] = 0.0
+        data[self._bc_slots[1]] = 0.0
         data[self._pattern.diagonal_slots[bc_rows]] = 1.0
         # A force-controlled obstacle may have no stiffness along some axis (a frictionless
         # plane in its own plane): a tiny spring in the Jacobian only keeps the matrix regular,
