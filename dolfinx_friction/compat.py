@@ -187,6 +187,61 @@ def assemble_vector(L) -> np.ndarray:
     return out
 
 
+def petsc_vector(u):
+    """The PETSc Vec (ghosted) behind a dolfinx Function."""
+    return u.x.petsc_vec if NEW_API else u.vector
+
+
+def create_matrix(a):
+    """An empty PETSc matrix with the sparsity of a compiled bilinear form."""
+    import dolfinx.fem.petsc
+    return dolfinx.fem.petsc.create_matrix(a)
+
+
+def assemble_matrix_into(A, a, bcs=()) -> None:
+    """Add a compiled bilinear form into ``A`` (dolfinx's treatment of ``bcs``: their rows
+    and columns zero, 1 on the diagonal), then assemble ``A``."""
+    import dolfinx.fem.petsc
+    dolfinx.fem.petsc.assemble_matrix(A, a, list(bcs))
+    A.assemble()
+
+
+def assemble_residual_into(b, L, a, bcs, x) -> None:
+    """``b = L(x)`` (zeroed first), lifted and with ``b = x - g`` on the rows of ``bcs``:
+    the residual of a Newton step ``x <- x - dx`` (what dolfinx's NonlinearProblem does)."""
+    import dolfinx.fem.petsc
+    from petsc4py import PETSc
+    with b.localForm() as local:
+        local.set(0.0)
+    dolfinx.fem.petsc.assemble_vector(b, L)
+    dolfinx.fem.petsc.apply_lifting(b, [a], [list(bcs)], [x], -1.0)
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    dolfinx.fem.petsc.set_bc(b, list(bcs), x, -1.0)
+
+
+def set_bc_values(x, bcs) -> None:
+    """Write the values of ``bcs`` into their rows of the (ghosted) vector ``x``."""
+    import dolfinx.fem.petsc
+    dolfinx.fem.petsc.set_bc(x, list(bcs))
+
+
+def bc_local_dofs(bc) -> np.ndarray:
+    """Local (unrolled, owned) dof indices of a DirichletBC."""
+    dofs, first_ghost = bc.dof_indices()
+    return np.asarray(dofs[:first_ghost], dtype=np.int64)
+
+
+def bc_on_space(bc, V) -> bool:
+    """Whether a DirichletBC constrains dofs of ``V`` (or of a subspace of it)."""
+    W = bc.function_space
+    return V._cpp_object.contains(getattr(W, "_cpp_object", W))
+
+
+def tagged(tags, value: int) -> np.ndarray:
+    """Local entities of a MeshTags object that carry ``value``."""
+    return np.asarray(tags.indices[tags.values == value], dtype=np.int32)
+
+
 def scalar_constant(mesh: dolfinx.mesh.Mesh, value: float):
     """A ``fem.Constant`` holding a real scalar (0.9 wants a numpy scalar of
     ``dolfinx.default_scalar_type``; 0.5 takes a Python float)."""

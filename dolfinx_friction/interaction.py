@@ -26,6 +26,17 @@ from dolfinx_friction.model import Rigid
 from dolfinx_friction.surfaces import MasterFaces, SlaveNodes
 
 
+class _Prescribed:
+    """Stands in for :class:`NodeValues` for a rigid obstacle without dofs: its
+    translation, whatever the vector."""
+
+    def __init__(self, master: RigidMaster):
+        self.master = master
+
+    def __call__(self, vec: PETSc.Vec) -> np.ndarray:
+        return np.asarray(self.master.translation, dtype=float).reshape(1, -1).copy()
+
+
 class NodeValues:
     """Values of a distributed system vector at chosen nodes, gathered from their owners."""
 
@@ -44,10 +55,13 @@ class NodeValues:
 
 @dataclass
 class RigidMaster:
-    """An analytic rigid obstacle whose translation is system node ``node``."""
+    """An analytic rigid obstacle whose translation is system node ``node``, or, with
+    ``node = None``, the prescribed ``translation`` (gdim,) (no dofs: its element
+    couples the slave node alone)."""
 
     rigid: Rigid
-    node: int
+    node: Optional[int] = None
+    translation: Optional[np.ndarray] = None
 
     def kinematics(self, X: np.ndarray, u: np.ndarray, U: np.ndarray) -> Kinematics:
         r = self.rigid
@@ -166,10 +180,12 @@ class ContactInteraction:
             self.cutoff = self.params.law.cutoff(self.slaves.area)
         n = len(self.slaves.nodes)
         if self.rigid:
+            node = self.master.node
             if self._gather is None:
-                self._gather = NodeValues(u, np.array([self.master.node]), self.gdim)
+                self._gather = (_Prescribed(self.master) if node is None
+                                else NodeValues(u, np.array([node]), self.gdim))
             self.candidates = _Candidates(np.arange(n), np.full(n, -1), np.stack(
-                [np.full(n, self.master.node), self.slaves.nodes], axis=1))
+                [np.full(n, -1 if node is None else node), self.slaves.nodes], axis=1))
             return
         x_s = self.slaves.X + self._slave_gather(u)
         self._exchange_faces(u_faces_local, x_s)
@@ -239,6 +255,10 @@ class ContactInteraction:
         chosen = order[np.unique(slave[order], return_index=True)[1]]
         self._set_elements(chosen, proj.xi[chosen])
 
+    def slave_displacements(self, u: PETSc.Vec) -> np.ndarray:
+        """(n, gdim) displacements of this rank's slave nodes in the system vector ``u``."""
+        return self._slave_gather(u)
+
     def needs_search(self) -> bool:
         """Whether a node projects onto none of its candidates since the last search (it
         may have slid past them all: a new search finds its face, or marks it
@@ -264,7 +284,8 @@ class ContactInteraction:
         self._first_pairing = False
         el = self.elements
         zero = np.zeros((len(self.slaves.X), self.gdim))
-        u_master = np.zeros_like(self._gather.local.getArray()).reshape(-1, self.gdim)
+        n_master = 1 if self.rigid else self._faces[0].size
+        u_master = np.zeros((n_master, self.gdim))
         g0 = self._kinematics(el, np.arange(len(el.slave)), zero, u_master).g_N
         self.initial_gap[el.slave] = np.minimum(g0, 0.0)
 

@@ -1,0 +1,532 @@
+"""Node-to-surface contact as a piece of a FEniCSx script's own problem.
+
+A :class:`NodeToSurface` couples the slave nodes of a facet set of one body with the
+master faces of a facet set of another body, or with an analytic rigid obstacle
+(:func:`rigid_plane`, :func:`rigid_sphere`, :func:`rigid_cylinder`).  It reads the
+user's displacement vector and adds the contact forces and their exact tangent into the
+user's PETSc residual and Jacobian, in the numbering of the user's system:
+
+* one vector space ``V``: dolfinx's own numbering of ``V`` (``u.vector``);
+* several spaces ``[V_0, V_1, ...]`` (``spaces=``): the blocks joined as dolfinx's block
+  assemblers join them (on each rank, the owned dofs of ``V_0``, then of ``V_1``, ...).
+
+One increment of a load-stepping loop::
+
+    contact.begin(x)                    # converged state: search candidates, checkpoint
+    A = create_matrix(a, [contact])     # sparsity of the form plus the contact couplings
+    for each Newton iterate x:
+        contact.update(x)               # pair slave nodes with faces, evaluate elements
+        ...assemble the bodies' residual into b...;  contact.add_residual(b, bcs)
+        ...assemble their Jacobian into A...;        contact.add_jacobian(A, bcs)
+    contact.commit()                    # or contact.rollback() before a smaller increment
+
+Dirichlet rows are left as dolfinx makes them: the contact adds nothing to the rows and
+columns of the dofs of ``bcs``.  Units are the user's (force, length); a penalty ``K``
+is a pressure per length.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional, Sequence, Union
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx_friction import compat
+from dolfinx_friction.contact.element import OPEN, ContactParameters
+from dolfinx_friction.contact.laws import Law
+from dolfinx_friction.fields import BodyField, DofLayout
+from dolfinx_friction.gmsh_io import BodyMesh
+from dolfinx_friction.interaction import ContactInteraction, RigidMaster
+from dolfinx_friction.model import Body, ContactPair, Rigid
+from dolfinx_friction.problem import make_law
+from dolfinx_friction.surfaces import SlaveNodes, master_faces
+
+NO_ELEMENT = -1  #: status of a slave node without a contact element (far from the master)
+
+
+class ContactSetupError(ValueError):
+    """A contact pair that cannot be built from what it was given (one-line message)."""
+
+
+@dataclass(frozen=True)
+class Surface:
+    """Facets of one body: those of ``tags`` (facet MeshTags of ``V.mesh``) equal to
+    ``value``, on the vector Lagrange space ``V`` of the body's displacement."""
+
+    V: object
+    tags: object
+    value: int
+
+    @property
+    def label(self) -> str:
+        return f"facets tagged {self.value}"
+
+
+def _vector(values, what: str) -> tuple[float, ...]:
+    v = tuple(float(c) for c in values)
+    if not all(np.isfinite(v)):
+        raise ContactSetupError(f"{what} must be finite, got {v}")
+    return v
+
+
+def _direction(values, what: str) -> tuple[float, ...]:
+    v = _vector(values, what)
+    if not np.linalg.norm(v) > 1e-12 * max(max(abs(c) for c in v), 1e-300) or not any(v):
+        raise ContactSetupError(f"{what} is zero: a rigid obstacle needs a direction")
+    return v
+
+
+def rigid_plane(point: Sequence[float], normal: Sequence[float], name: str = "plane") -> Rigid:
+    """A rigid plane through ``point``; ``normal`` points towards the deformable body."""
+    return Rigid(name, "plane", point=_vector(point, "rigid plane point"),
+                 normal=_direction(normal, "rigid plane normal"))
+
+
+def rigid_sphere(center: Sequence[float], radius: float, name: str = "sphere") -> Rigid:
+    """A rigid sphere (a circle in 2D); the body touches it from outside."""
+    if not float(radius) > 0.0:
+        raise ContactSetupError(f"rigid sphere radius must be positive, got {radius}")
+    return Rigid(name, "sphere", center=_vector(center, "rigid sphere center"),
+                 radius=float(radius))
+
+
+def rigid_cylinder(point: Sequence[float], axis: Sequence[float], radius: float,
+                   name: str = "cylinder") -> Rigid:
+    """A rigid circular cylinder (3D) through ``point`` along ``axis``."""
+    if not float(radius) > 0.0:
+        raise ContactSetupError(f"rigid cylinder radius must be positive, got {radius}")
+    return Rigid(name, "cylinder", point=_vector(point, "rigid cylinder point"),
+                 axis=_direction(axis, "rigid cylinder axis"), radius=float(radius))
+
+
+@dataclass
+class ContactState:
+    """The contact at the slave nodes this rank owns, arrays of length ``n``.
+
+    ``status``: :data:`NO_ELEMENT` (-1), 0 open, 1 stick, 2 slip.  ``pressure`` [force /
+    area] > 0 in compression; ``traction`` (n, gdim) [force / area] is the tangential
+    traction acting on the slave body; ``force`` (n, gdim) [force] the whole contact force
+    on the slave node; ``gap`` [length] the clearance (< 0: overclosure); ``slip``
+    [length] the accumulated slip; ``area`` the node's representative area.  Nodes
+    without an element have zeros.
+    """
+
+    nodes: np.ndarray  # (n,) local node (dof block) index in the slave space
+    x: np.ndarray  # (n, gdim) current coordinates
+    status: np.ndarray
+    gap: np.ndarray
+    pressure: np.ndarray
+    traction: np.ndarray
+    slip: np.ndarray
+    force: np.ndarray
+    area: np.ndarray
+
+
+def _space_label(V) -> str:
+    return f"space on a {V.mesh.topology.dim}D mesh"
+
+
+def _check_space(V, role: str) -> int:
+    gdim = V.mesh.geometry.dim
+    if V.dofmap.index_map_bs != gdim:
+        raise ContactSetupError(f"{role}: the function space has {V.dofmap.index_map_bs} "
+                                f"component(s), contact needs a vector space of the mesh's "
+                                f"dimension {gdim}")
+    return gdim
+
+
+def _facets(surface: Surface, role: str, comm: MPI.Comm) -> np.ndarray:
+    mesh = surface.V.mesh
+    if surface.tags.dim != mesh.topology.dim - 1:
+        raise ContactSetupError(f"{role}: the tags have dimension {surface.tags.dim}, facets "
+                                f"of this mesh have {mesh.topology.dim - 1}")
+    facets = compat.tagged(surface.tags, surface.value)
+    if not comm.allreduce(len(facets)):
+        present = sorted(set().union(*comm.allgather(set(np.unique(surface.tags.values)
+                                                          .tolist()))))
+        raise ContactSetupError(f"{role}: no facet is tagged {surface.value} (the tags hold "
+                                f"{present})")
+    return facets
+
+
+class NodeToSurface:
+    """Penalty node-to-surface contact with Coulomb friction between two surfaces.
+
+    Parameters
+    ----------
+    slave : Surface
+        The facets whose nodes are projected onto the master.
+    master : Surface or Rigid
+        Master facets of a (usually other) body, or an analytic rigid obstacle; a rigid
+        obstacle's translation is :attr:`obstacle_translation` (prescribed, no dofs).
+    spaces : the spaces of the user's system, in block order (default: the slave's space,
+        then the master's if it is another one).
+    law : pressure-overclosure law (``contact.Linear``, ``Exponential``, ``Tabular``);
+        default: the linear law with penalty ``K``, ``sigma_inf``, ``c0``.
+    K, sigma_inf, c0 : the linear law's penalty [pressure/length], tension limit
+        [pressure] and cutoff factor; defaults 50 E, E / 70000, 1e-3 (contact-theory.md §8).
+    mu : Coulomb friction coefficient (0: frictionless, the friction path is skipped).
+    stick_slope : tangential penalty ``lambda`` [pressure/length], default E / 2.
+    E : the slave body's Young's modulus, for the defaults above.
+    tangent : ``"consistent"`` (the exact tangent) or ``"calculix"``.
+    thickness : out-of-plane thickness of a 2D (plane) body, scales slave areas.
+    pairing_iterations : Newton iterations per increment that re-pair slave nodes
+        (CalculiX: 8; 1 is small sliding).
+    """
+
+    def __init__(self, slave: Surface, master: Union[Surface, Rigid], *,
+                 spaces: Optional[Sequence] = None, law: Optional[Law] = None,
+                 K: Optional[float] = None, sigma_inf: Optional[float] = None,
+                 c0: Optional[float] = None, mu: float = 0.0,
+                 stick_slope: Optional[float] = None, E: Optional[float] = None,
+                 tangent: str = "consistent", thickness: float = 1.0,
+                 pairing_iterations: int = 8, name: str = "contact"):
+        comm = slave.V.mesh.comm
+        self.comm, self.name = comm, name
+        self.gdim = _check_space(slave.V, f"{name}: slave")
+        rigid = isinstance(master, Rigid)
+        if not rigid:
+            if _check_space(master.V, f"{name}: master") != self.gdim:
+                raise ContactSetupError(f"{name}: slave and master meshes differ in dimension")
+        if spaces is None:
+            spaces = [slave.V] if rigid or master.V is slave.V else [slave.V, master.V]
+        self.spaces = list(spaces)
+        self.params = self._parameters(law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
+                                       pairing_iterations)
+        self.layout = DofLayout(comm, [V.dofmap.index_map for V in self.spaces], 0)
+        slave_facets = _facets(slave, f"{name}: slave", comm)
+        self._fields: list[BodyField] = []
+        slave_field = self._field(slave.V, "slave", slave_facets, thickness)
+        if rigid:
+            if master.shape == "cylinder" and self.gdim != 3:
+                raise ContactSetupError(f"{name}: a rigid cylinder needs a 3D mesh (use "
+                                        f"rigid_sphere for a circle in 2D)")
+            for key in ("point", "normal", "center", "axis"):
+                v = getattr(master, key)
+                if v is not None and len(v) != self.gdim:
+                    raise ContactSetupError(f"{name}: the obstacle's {key} has {len(v)} "
+                                            f"components, the mesh is {self.gdim}D")
+            self._master_field = None
+            self.obstacle_translation = np.zeros(self.gdim)
+            master_side = RigidMaster(master, None, self.obstacle_translation)
+        else:
+            master_facets = _facets(master, f"{name}: master", comm)
+            if master.V.mesh is slave.V.mesh:
+                shared = np.intersect1d(master_facets, slave_facets)
+                if comm.allreduce(len(shared)):
+                    raise ContactSetupError(f"{name}: slave and master share facets: a "
+                                            f"surface cannot contact itself")
+            self._master_field = self._field(master.V, "master", master_facets, thickness)
+            # each facet once over all ranks: the ones this rank owns
+            master_side = master_faces(self._master_field, "master")
+        slaves = SlaveNodes(slave_field, "slave")
+        self._slave_field = slave_field
+        self._interaction = ContactInteraction(comm, name, self.params.element, slaves,
+                                               master_side, self.gdim,
+                                               self.params.pairing_iterations)
+        self._u_n: Optional[PETSc.Vec] = None
+        self._saved: Optional[tuple] = None
+        self._iteration = 0
+        self._u_slaves = np.zeros((len(slaves.nodes), self.gdim))
+        self._bc_cache: tuple = ((), np.zeros(0, np.int64))
+        #: changes whenever the candidate couplings (the matrix pattern) change
+        self.couplings_version = 0
+        self._matrices: dict[int, int] = {}
+
+    # ------------------------------------------------------------- set-up
+    def _parameters(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
+                    pairing_iterations) -> "_Parameters":
+        name = self.name
+        for key, value in (("K", K), ("sigma_inf", sigma_inf), ("c0", c0), ("mu", mu),
+                           ("stick_slope", stick_slope), ("E", E)):
+            if value is not None and not np.isfinite(value):
+                raise ContactSetupError(f"{name}: {key} must be finite, got {value}")
+        if mu < 0.0:
+            raise ContactSetupError(f"{name}: mu must be >= 0, got {mu}")
+        for key, value in (("K", K), ("stick_slope", stick_slope), ("E", E)):
+            if value is not None and value <= 0.0:
+                raise ContactSetupError(f"{name}: {key} must be positive, got {value}")
+        if tangent not in ("consistent", "calculix"):
+            raise ContactSetupError(f"{name}: tangent must be 'consistent' or 'calculix', "
+                                    f"got {tangent!r}")
+        if int(pairing_iterations) < 1:
+            raise ContactSetupError(f"{name}: pairing_iterations must be >= 1")
+        missing = [key for key, value in (("K", K if law is None else 1.0),
+                                          ("sigma_inf", sigma_inf if law is None else 1.0),
+                                          ("stick_slope", stick_slope if mu > 0 else 1.0))
+                   if value is None]
+        if missing and E is None:
+            raise ContactSetupError(f"{name}: give E (the slave body's Young's modulus) for "
+                                    f"the default {', '.join(missing)}, or give them")
+        pair = ContactPair("slave", "master", K=K, sigma_inf=sigma_inf, c0=c0, mu=float(mu),
+                           stick_slope=stick_slope, tangent=tangent,
+                           pairing_iterations=int(pairing_iterations)).resolved(E or 1.0)
+        law = law if law is not None else make_law(pair)
+        return _Parameters(ContactParameters(law, pair.mu, pair.stick_slope, pair.tangent),
+                           pair.pairing_iterations)
+
+    def _field(self, V, group: str, facets: np.ndarray, thickness: float) -> BodyField:
+        block = next((b for b, W in enumerate(self.spaces) if W is V), None)
+        if block is None:
+            raise ContactSetupError(f"{self.name}: the {group}'s function space is not one "
+                                    f"of `spaces`")
+        existing = next((f for f in self._fields if f.block == block), None)
+        if existing is not None:
+            existing.mesh.groups[group] = (V.mesh.topology.dim - 1, facets)
+            return existing
+        mesh = V.mesh
+        body = Body(f"{self.name}:{group}", E=1.0, nu=0.0, thickness=float(thickness))
+        groups = {group: (mesh.topology.dim - 1, facets)}
+        X = V.tabulate_dof_coordinates()[:, : self.gdim].copy()
+        f = BodyField(body, BodyMesh(body.name, mesh, groups), V, compat.function(V), block,
+                      self.layout.nodes(block), X)
+        self._fields.append(f)
+        return f
+
+    # ------------------------------------------------------------- increments
+    def begin(self, x: PETSc.Vec, start: Optional[PETSc.Vec] = None) -> None:
+        """Start an increment (collective): checkpoint the friction history for
+        :meth:`rollback`, update the slave areas and search the candidate master faces
+        of every slave node at ``x``, the increment's first iterate.  ``start`` is the
+        converged state the increment starts from (default ``x``): slip is measured
+        from it."""
+        self._u_n = self._u_n or x.duplicate()
+        (start or x).copy(self._u_n)
+        self._saved = self._interaction.save()
+        self._search(x, update_areas=True)
+        self._iteration = 0
+
+    def update(self, x: PETSc.Vec, pairing: bool = True, search: bool = True) -> bool:
+        """Pair the slave nodes at the iterate ``x`` and evaluate the elements (collective).
+
+        Pairing happens in the first ``pairing_iterations`` calls of an increment with
+        ``pairing=True`` (pass ``False`` for line-search trials).  Returns True when a node
+        slid past all its candidate faces and they were searched again (``search``): the
+        couplings changed, make the matrix again (:func:`create_matrix`).  Without
+        ``search`` such a node keeps the face it misses least.
+        """
+        if self._u_n is None:
+            raise RuntimeError(f"{self.name}: call begin(x) at the start of the increment")
+        inter, changed = self._interaction, False
+        if pairing and self._iteration < inter.pairing_iterations:
+            inter.pair(x, self._iteration)
+            if (search and self._iteration > 0
+                    and self.comm.allreduce(int(inter.needs_search()))):
+                self._search(x, update_areas=False)
+                inter.pair(x, self._iteration)
+                changed = True
+            inter.mark_off_surface()
+        if pairing:
+            self._iteration += 1
+        el = inter.evaluate(x, self._u_n)
+        self._u_slaves = inter.slave_displacements(x)
+        return changed
+
+    def commit(self) -> None:
+        """Accept the increment: its trial friction history becomes the start state."""
+        self._interaction.commit()
+
+    def rollback(self) -> None:
+        """Forget the increment: restore the history saved by :meth:`begin`."""
+        if self._saved is not None:
+            self._interaction.restore(self._saved)
+
+    def _search(self, x: PETSc.Vec, update_areas: bool) -> None:
+        before = self._interaction.candidates.nodes
+        for f in self._fields:
+            f.u.x.array[: f.n_owned * self.gdim] = x.getArray(readonly=True)[
+                self.layout.owned_slice(f.block, self.gdim)]
+            compat.scatter_forward(f.u)
+        master_u = None
+        if self._master_field is not None:
+            f = self._master_field
+            master_u = f.u.x.array.reshape(-1, self.gdim)[self._interaction.master.local]
+        self._interaction.search(x, master_u, update_areas)
+        same = np.array_equal(before, self._interaction.candidates.nodes)
+        if self.comm.allreduce(0 if same else 1):
+            self.couplings_version += 1
+
+    # ------------------------------------------------------------- assembly
+    def _dofs(self) -> np.ndarray:
+        """(n_candidates, nodes * gdim) global dofs of the candidate elements, -1 for the
+        nodes of a rigid obstacle (no dofs)."""
+        nodes = self._interaction.candidates.nodes
+        d = self.gdim
+        dofs = (nodes[:, :, None] * d + np.arange(d)).reshape(len(nodes), -1)
+        dofs[np.repeat(nodes < 0, d, axis=1)] = -1
+        return dofs
+
+    def _bc_dofs(self, bcs: Sequence) -> np.ndarray:
+        """Sorted global dofs of the Dirichlet conditions ``bcs`` (all ranks; collective)."""
+        key = tuple(id(bc) for bc in bcs)
+        if self._bc_cache[0] == key:
+            return self._bc_cache[1]
+        d, own = self.gdim, []
+        for bc in bcs:
+            block = next((b for b, V in enumerate(self.spaces) if compat.bc_on_space(bc, V)),
+                         None)
+            if block is None:
+                continue  # a condition on another space: none of the contact's rows
+            local = compat.bc_local_dofs(bc)
+            own.append(self.layout.nodes(block)[local // d] * d + local % d)
+        mine = np.concatenate(own) if own else np.zeros(0, np.int64)
+        dofs = np.unique(np.concatenate(self.comm.allgather(mine)))
+        self._bc_cache = (key, dofs)
+        return dofs
+
+    def _masked_dofs(self, bcs: Sequence) -> np.ndarray:
+        dofs = self._dofs()
+        fixed = self._bc_dofs(bcs)
+        if len(fixed):
+            at = np.searchsorted(fixed, dofs).clip(max=len(fixed) - 1)
+            dofs[fixed[at] == dofs] = -1
+        return dofs
+
+    def _element_rows(self) -> np.ndarray:
+        return self._interaction.elements.candidate
+
+    def add_residual(self, b: PETSc.Vec, bcs: Sequence = ()) -> None:
+        """Add the contact forces (internal forces: residual = internal - external) into
+        ``b`` (collective; ``b`` is assembled afterwards)."""
+        el = self._evaluated()
+        dofs = self._masked_dofs(bcs)[el.candidate]
+        values = el.result.f.reshape(len(dofs), -1)
+        keep = dofs >= 0
+        b.setValues(dofs[keep].astype(PETSc.IntType), values[keep], addv=PETSc.InsertMode.ADD)
+        b.assemble()
+
+    def add_jacobian(self, A: PETSc.Mat, bcs: Sequence = ()) -> None:
+        """Add the contact tangent into ``A`` (collective; assembled afterwards).
+
+        ``A`` must hold the candidate couplings in its pattern: make it with
+        :func:`create_matrix` after :meth:`begin` (and again when :meth:`update`
+        returned True).
+        """
+        if self._matrices.get(A.handle) != self.couplings_version:
+            raise ContactSetupError(f"{self.name}: the matrix has no slots for the current "
+                                    f"contact couplings: make it with create_matrix(...) "
+                                    f"after begin() (and again when update() returns True)")
+        el = self._evaluated()
+        dofs = self._masked_dofs(bcs)[el.candidate].astype(PETSc.IntType)
+        nd = dofs.shape[1]
+        A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)  # after dolfinx's INSERT of diagonals
+        A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        A.setValuesRCV(dofs, dofs, el.result.K.reshape(-1, nd, nd), addv=PETSc.InsertMode.ADD)
+        A.assemble()
+
+    def couplings(self) -> tuple[np.ndarray, np.ndarray]:
+        """Global ``(rows, cols)`` of every entry the contact tangent may fill until the
+        next search (each candidate element's dofs, all against all)."""
+        dofs = self._dofs()
+        keep = dofs >= 0
+        n, nd = dofs.shape
+        rows = np.repeat(dofs, nd, axis=1).reshape(n, nd, nd)
+        cols = np.tile(dofs, (1, nd)).reshape(n, nd, nd)
+        both = keep[:, :, None] & keep[:, None, :]
+        return rows[both], cols[both]
+
+    def coupling_values(self, bcs: Sequence = ()) -> np.ndarray:
+        """Tangent values in the order of :meth:`couplings` (0 where a candidate is not an
+        element, and in the rows and columns of ``bcs``)."""
+        el = self._evaluated()
+        dofs = self._dofs()
+        n, nd = dofs.shape
+        K = np.zeros((n, nd, nd))
+        K[el.candidate] = el.result.K.reshape(-1, nd, nd)
+        masked = self._masked_dofs(bcs) < 0
+        K[masked[:, :, None] | masked[:, None, :]] = 0.0
+        keep = dofs >= 0
+        return K[keep[:, :, None] & keep[:, None, :]]
+
+    def register_matrix(self, A: PETSc.Mat) -> None:
+        """Declare that ``A``'s pattern holds the current couplings (done by
+        :func:`create_matrix`; for a matrix preallocated some other way)."""
+        self._matrices[A.handle] = self.couplings_version
+
+    def _evaluated(self):
+        el = self._interaction.elements
+        if el.result is None:
+            raise RuntimeError(f"{self.name}: call update(x) before assembling")
+        return el
+
+    # ------------------------------------------------------------- results
+    def state(self) -> ContactState:
+        """The contact at this rank's owned slave nodes (after :meth:`update`)."""
+        inter = self._interaction
+        slaves = inter.slaves
+        n, d = len(slaves.nodes), self.gdim
+        out = ContactState(slaves.local.copy(), slaves.X + self._u_slaves,
+                           np.full(n, NO_ELEMENT), np.zeros(n), np.zeros(n), np.zeros((n, d)),
+                           np.zeros(n), np.zeros((n, d)), slaves.area.copy())
+        el = inter.elements
+        r = el.result
+        if r is not None:
+            s, area = el.slave, slaves.area[el.slave]
+            out.status[s] = r.status
+            out.gap[s] = r.g_N
+            out.pressure[s] = np.where(r.status != OPEN, r.F_N, 0.0) / area
+            out.traction[s] = -r.F_T / area[:, None]
+            out.force[s] = -r.f[:, -1, :]
+            if r.trial is not None:
+                out.slip[s] = np.linalg.norm(r.trial.g_p, axis=1)
+        return out
+
+    def force(self) -> np.ndarray:
+        """(gdim,) total contact force on the slave body, summed over all ranks
+        (collective)."""
+        return self.comm.allreduce(self.state().force.sum(axis=0))
+
+    def counts(self) -> tuple[int, int]:
+        """Slave nodes in contact (closed) and slipping, over all ranks (collective)."""
+        return tuple(int(c) for c in self.comm.allreduce(np.asarray(self._interaction.counts())))
+
+    def fields(self) -> dict:
+        """The state as dolfinx Functions on the slave body's mesh (for dolfinx's writers):
+        ``contact_pressure``, ``contact_status``, ``contact_slip`` (scalar) and
+        ``tangential_traction`` (vector), zero (status -1) away from the slave nodes."""
+        st = self.state()
+        V = self._slave_field.V
+        S = compat.scalar_space(V.mesh, compat.space_degree(V))
+        out = {}
+        for key, values, space in (("contact_pressure", st.pressure, S),
+                                   ("contact_status", st.status, S),
+                                   ("contact_slip", st.slip, S),
+                                   ("tangential_traction", st.traction, V)):
+            g = compat.function(space)
+            width = 1 if values.ndim == 1 else values.shape[1]
+            array = g.x.array.reshape(-1, width)
+            array[:] = NO_ELEMENT if key == "contact_status" else 0.0
+            array[st.nodes] = values.reshape(len(st.nodes), width)
+            compat.scatter_forward(g)
+            g.name = key
+            out[key] = g
+        return out
+
+
+@dataclass(frozen=True)
+class _Parameters:
+    element: ContactParameters
+    pairing_iterations: int
+
+
+def create_matrix(a, contacts: Sequence[NodeToSurface] = ()) -> PETSc.Mat:
+    """A PETSc matrix for the compiled bilinear form ``a`` (one space) whose sparsity also
+    holds the current couplings of ``contacts``: dolfinx assembles ``a`` into it as into
+    its own matrix, and the contacts add their tangents without new non-zeros.
+    Collective; call after :meth:`NodeToSurface.begin`."""
+    from dolfinx_friction.assembly import CooPattern
+    base = compat.create_matrix(a)
+    compat.assemble_matrix_into(base, a)
+    indptr, cols, _ = base.getValuesCSR()
+    start, end = base.getOwnershipRange()
+    rows = np.repeat(np.arange(start, end, dtype=np.int64), np.diff(indptr))
+    blocks = [(rows, cols)] + [c.couplings() for c in contacts]
+    pattern = CooPattern(base.getComm().tompi4py(), end - start, blocks)
+    A = pattern.create_matrix(base.getBlockSize())
+    A.setLGMap(*base.getLGMap())
+    base.destroy()
+    for c in contacts:
+        c.register_matrix(A)
+    return A
