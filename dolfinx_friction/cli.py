@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 from dolfinx_friction.errors import EXIT_INPUT, EXIT_INTERNAL, OutputError, classify
+from dolfinx_friction.inputs import file_fault
 from dolfinx_friction.scene import SceneError, default_output_dir, load_scene
 
 
@@ -46,8 +47,8 @@ def _precheck(args, scene) -> None:
     """What can be told before dolfinx is imported and the mesh is read: the mesh file
     exists, and no regular file stands where the output directory is to be made."""
     mesh = Path(scene.mesh)
-    if not mesh.is_file():
-        reason = "is a directory" if mesh.is_dir() else "no such file"
+    reason = file_fault(mesh)
+    if reason is not None:
         raise SceneError(f"mesh.file: {mesh}: {reason}", key="mesh.file", source=str(args.scene))
     if args.command != "run":
         return
@@ -117,9 +118,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = _parser().parse_args(argv)
     _quiet_libraries(args.debug)
     try:
-        if not args.scene.is_file():
-            reason = "is a directory" if args.scene.is_dir() else "no such scene file"
-            raise SceneError(f"{args.scene}: {reason}")
+        reason = file_fault(args.scene)
+        if reason is not None:
+            raise SceneError(f"{args.scene}: "
+                             f"{'no such scene file' if reason == 'no such file' else reason}")
         # The scene is read and validated before dolfinx is imported: a bad scene is
         # answered at once.
         scene = load_scene(args.scene, args.overrides)

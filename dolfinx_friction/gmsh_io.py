@@ -15,8 +15,11 @@ every rank raises the same :class:`MeshError`.
 from __future__ import annotations
 
 import contextlib
-
+import mmap
 import os
+import re
+import stat
+import tempfile
 import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,6 +32,7 @@ import dolfinx
 import dolfinx.mesh
 
 from . import compat
+from .inputs import file_fault
 
 __all__ = ["MeshError", "BodyMesh", "MeshSet", "load_mesh"]
 
@@ -319,47 +323,132 @@ def _gmsh_initialized(gmsh) -> bool:
         return False
 
 
+# The first line of a Gmsh MSH file and its format line: "version file-type data-size".
+_MSH_FORMAT = re.compile(rb"\$MeshFormat\r?\n(2\.2|4\.1) ([01]) (\d+)\r?\n")
+# Section -> (position of the declared count on its first line, at least how many
+# bytes each item takes in the file) for MSH 2.2 and 4.1.
+_MSH_COUNTS = {"2.2": {b"$Nodes": (0, 8), b"$Elements": (0, 4)},
+               "4.1": {b"$Nodes": (1, 8), b"$Elements": (1, 4)}}
+
+
+def _declared_counts(data: Any, version: str, binary: int, where: str) -> None:
+    """Refuse a node or element count that the file is far too small to hold."""
+    size = len(data)
+    for section, (position, item_bytes) in _MSH_COUNTS[version].items():
+        at = data.find(b"\n" + section + b"\n")
+        if at < 0:
+            continue
+        start = at + len(section) + 2
+        if binary and version == "4.1":  # four size_t values (binary = sizeof(size_t))
+            if binary not in (4, 8) or start + 4 * binary > size:
+                continue
+            words = np.frombuffer(data[start:start + 4 * binary], dtype=f"<u{binary}")
+            count = int(words[position])
+        else:
+            line = bytes(data[start:start + 200]).split(b"\n", 1)[0].split()
+            if len(line) <= position or not line[position].isdigit():
+                raise MeshError(f"{where} cannot be read: its {section.decode()} section "
+                                "does not start with its count")
+            count = int(line[position])
+        if count * item_bytes > size:
+            raise MeshError(f"{where} declares {count} {section.decode()[1:].lower()}, "
+                            f"more than its {size} bytes can hold")
+
+
+def check_msh(path: Path, fd: int) -> None:
+    """Raise MeshError unless the open file ``fd`` is Gmsh MSH 2.2 or 4.1 (ASCII or binary).
+
+    Only the header and the declared node and element counts are read: a file that
+    passes is given to gmsh's MSH reader, never to its script (.geo) interpreter.
+    """
+    where = f"mesh file '{path}'"
+    head = os.pread(fd, 64, 0)
+    match = _MSH_FORMAT.match(head)
+    if match is None:
+        found = head.split(b"\n", 1)[0][:40].decode("ascii", "replace")
+        raise MeshError(f"{where} cannot be read: it is not Gmsh MSH 2.2 or 4.1 (that "
+                        "starts with '$MeshFormat' and a line 'version file-type data-size'; "
+                        f"it starts with {found!r})")
+    version = match.group(1).decode()
+    binary = int(match.group(3)) if match.group(2) == b"1" else 0
+    if os.fstat(fd).st_size == 0:  # pragma: no cover - the header was read
+        return
+    with mmap.mmap(fd, 0, access=mmap.ACCESS_READ) as data:
+        _declared_counts(data, version, binary, where)
+
+
+@contextlib.contextmanager
+def _private_link(path: Path):
+    """``path`` opened and checked as MSH, seen through a link in a private directory.
+
+    gmsh merges ``<file>.opt`` (a script) when it finds one next to a mesh, and it
+    chooses its reader from the name: the link is named ``mesh.msh`` in a fresh
+    directory, and points at the very file that was checked (``/proc/self/fd``).
+    """
+    where = f"mesh file '{path}'"
+    fault = file_fault(path)
+    if fault == "no such file":
+        raise MeshError(f"{where} does not exist")
+    if fault is not None:
+        raise MeshError(f"{where}: {fault}")
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    except OSError as e:
+        raise MeshError(f"{where} cannot be opened: {e.strerror}") from None
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise MeshError(f"{where}: is not a regular file")
+        check_msh(path, fd)
+        with tempfile.TemporaryDirectory(prefix="dolfinx_friction_mesh_") as tmp:
+            link = Path(tmp) / "mesh.msh"
+            os.symlink(f"/proc/self/fd/{fd}", link)
+            yield link
+    finally:
+        os.close(fd)
+
+
 @contextlib.contextmanager
 def gmsh_file(path: Path):
     """The gmsh module with ``path`` merged into a fresh model, for the ``with`` block.
 
     Initialises gmsh if needed (finalising it afterwards), and otherwise restores the
     caller's current model and terminal setting.  Raises MeshError when the file is
-    missing or cannot be read.
+    missing, not a regular file, not Gmsh MSH 2.2 or 4.1 or cannot be read: gmsh
+    never sees a file that it would run as a script.
     """
     import gmsh
 
     where = f"mesh file '{path}'"
-    if not path.is_file():
-        raise MeshError(f"{where} does not exist")
-    own = not _gmsh_initialized(gmsh)
-    if own:
-        gmsh.initialize()
-        previous, terminal = None, None
-    else:
-        previous = gmsh.model.getCurrent()
-        terminal = gmsh.option.getNumber("General.Terminal")
-    gmsh.option.setNumber("General.Terminal", 0)
-    name = f"dolfinx_friction_{uuid.uuid4().hex}"
-    try:
-        gmsh.model.add(name)
-        try:
-            gmsh.merge(str(path))
-        except Exception as e:
-            raise MeshError(f"{where} cannot be read: {e}") from None
-        yield gmsh
-    finally:
-        try:
-            gmsh.model.setCurrent(name)
-            gmsh.model.remove()
-        except Exception:  # pragma: no cover
-            pass
+    with _private_link(path) as link:
+        own = not _gmsh_initialized(gmsh)
         if own:
-            gmsh.finalize()
+            gmsh.initialize()
+            previous, terminal = None, None
         else:
-            gmsh.option.setNumber("General.Terminal", terminal)
-            if previous is not None and previous in gmsh.model.list():
-                gmsh.model.setCurrent(previous)
+            previous = gmsh.model.getCurrent()
+            terminal = gmsh.option.getNumber("General.Terminal")
+        gmsh.option.setNumber("General.Terminal", 0)
+        name = f"dolfinx_friction_{uuid.uuid4().hex}"
+        try:
+            gmsh.model.add(name)
+            try:
+                gmsh.merge(str(link))
+            except Exception as e:
+                message = str(e).replace(str(link), str(path))
+                raise MeshError(f"{where} cannot be read: {message}") from None
+            yield gmsh
+        finally:
+            try:
+                gmsh.model.setCurrent(name)
+                gmsh.model.remove()
+            except Exception:  # pragma: no cover
+                pass
+            if own:
+                gmsh.finalize()
+            else:
+                gmsh.option.setNumber("General.Terminal", terminal)
+                if previous is not None and previous in gmsh.model.list():
+                    gmsh.model.setCurrent(previous)
 
 
 def _read_file(path: Path, body_names: Sequence[str]) -> _Plan:

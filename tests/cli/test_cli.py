@@ -276,7 +276,27 @@ def workdir(tmp_path_factory) -> Path:
         assert tomllib.loads(written) == data  # the writer is faithful
         (d / f"{name}.toml").write_text(written)
     (d / "a_file").write_text("not a directory\n")
+    _hostile_inputs(d, text)
     return d
+
+
+def _script(marker: Path) -> str:
+    """A Gmsh .geo script that would create ``marker`` if gmsh ran it."""
+    return f'SystemCall "touch {marker}";\nPoint(1) = {{0, 0, 0, 1}};\n'
+
+
+def _hostile_inputs(d: Path, two_msh: bytes) -> None:
+    """Files that are not what their names say: scripts, a FIFO, a device, huge counts."""
+    (d / "script.msh").write_text(_script(d / "ran_script"))
+    (d / "opt.msh").write_bytes(two_msh)  # a good mesh with an options script beside it
+    (d / "opt.msh.opt").write_text(_script(d / "ran_opt"))
+    os.mkfifo(d / "fifo.msh")
+    os.mkfifo(d / "fifo.toml")
+    (d / "zero.msh").symlink_to("/dev/zero")
+    (d / "dir.msh").mkdir()
+    (d / "v3.msh").write_bytes(two_msh.replace(b"4.1 0 8", b"3.0 0 8", 1))
+    (d / "huge.msh").write_bytes(re.sub(rb"\$Nodes\n(\d+) \d+", rb"$Nodes\n\1 1000000000000",
+                                        two_msh, count=1))
 
 
 # --------------------------------------------------------------------------- bad inputs
@@ -429,6 +449,16 @@ CASES = [
     Case("mesh_truncated", ["truncated.msh"], [("mesh.file", "truncated.msh")]),
     Case("mesh_without_names", ["nonames.msh", "no named physical groups"],
          [("mesh.file", "nonames.msh")]),
+    Case("mesh_is_a_geo_script", ["script.msh", "not Gmsh MSH"],
+         [("mesh.file", "script.msh")], command="run", args=["--out", "{d}/never"]),
+    Case("mesh_is_a_fifo", ["mesh.file", "fifo.msh", "FIFO"], [("mesh.file", "fifo.msh")]),
+    Case("mesh_is_dev_zero", ["mesh.file", "/dev/zero", "device"], [("mesh.file", "zero.msh")]),
+    Case("mesh_is_a_directory", ["mesh.file", "dir.msh", "directory"],
+         [("mesh.file", "dir.msh")]),
+    Case("mesh_version_3", ["v3.msh", "not Gmsh MSH 2.2 or 4.1"], [("mesh.file", "v3.msh")]),
+    Case("mesh_declares_huge_node_count", ["huge.msh", "1000000000000 nodes"],
+         [("mesh.file", "huge.msh")]),
+    Case("scene_is_a_fifo", ["fifo.toml", "FIFO"], scene="{d}/fifo.toml"),
     Case("mesh_with_empty_group", ["empty_group", "empty"],
          [("mesh.file", "empty_group.msh"), ("body", [{"name": "block", "E": 1.0, "nu": 0.3}]),
           ("contact", []), ("step", [{"bc": [{"on": "bottom", "u": [0.0, 0.0, 0.0]}]}])]),
@@ -466,6 +496,17 @@ def test_bad_input_one_line(case, outcomes, workdir):
     assert_one_line_error(out, case.expect)
     assert out.stdout == "", str(out)
     assert not (workdir / "never").exists()
+
+
+def test_mesh_files_run_no_code(workdir):
+    """A .geo script named .msh, and an options script beside a good mesh, run nothing."""
+    script = cli("run", workdir / "good.toml", "--set", 'mesh.file="script.msh"',
+                 "--out", workdir / "never", cwd=workdir)
+    assert_one_line_error(script, ["script.msh"])
+    assert not (workdir / "ran_script").exists()
+    good = cli("check", workdir / "good.toml", "--set", 'mesh.file="opt.msh"', cwd=workdir)
+    assert good.status == 0, str(good)
+    assert not (workdir / "ran_opt").exists()
 
 
 def test_debug_shows_traceback(workdir):

@@ -7,6 +7,8 @@ only (files go to a directory broadcast from rank 0); every rank calls
 from __future__ import annotations
 
 import contextlib
+import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -425,6 +427,61 @@ def test_corrupt_file(shared_dir):
     expect_error(path, ["a"], r"corrupt\.msh.*cannot be read")
     if ROOT:
         assert not _gmsh_initialized(gmsh)
+
+
+def test_geo_script_is_not_run(shared_dir):
+    """A .geo script saved as .msh is refused before gmsh reads it: its SystemCall never runs."""
+    path, marker = shared_dir / "script.msh", shared_dir / "ran"
+    if ROOT:
+        path.write_text(f'SystemCall "touch {marker}";\nPoint(1) = {{0, 0, 0, 1}};\n')
+    comm.barrier()
+    expect_error(path, ["a"], r"script\.msh.*not Gmsh MSH 2\.2 or 4\.1")
+    assert not marker.exists()
+
+
+def test_options_file_beside_mesh_is_not_run(boxes_file):
+    """gmsh would merge ``<mesh>.opt`` (a script) found beside the mesh: it must not."""
+    marker = boxes_file.parent / "ran"
+    if ROOT:
+        Path(f"{boxes_file}.opt").write_text(f'SystemCall "touch {marker}";\n')
+    comm.barrier()
+    load_mesh(boxes_file, ["lower", "upper"], comm)
+    assert not marker.exists()
+
+
+@pytest.mark.parametrize("kind, said", [("fifo", "a FIFO, not a regular file"),
+                                        ("device", "a device, not a regular file"),
+                                        ("directory", "a directory, not a file")])
+def test_not_a_regular_file(shared_dir, kind, said):
+    path = shared_dir / f"{kind}.msh"
+    if ROOT:
+        {"fifo": lambda: os.mkfifo(path), "device": lambda: path.symlink_to("/dev/zero"),
+         "directory": path.mkdir}[kind]()
+    comm.barrier()
+    expect_error(path, ["a"], rf"{kind}\.msh': is {said}")
+
+
+@pytest.mark.parametrize("binary", [False, True])
+def test_absurd_node_count(boxes_file, binary):
+    """A declared node count that the file cannot hold is refused before gmsh allocates it."""
+    path = boxes_file.parent / f"huge_{binary}.msh"
+
+    def make():
+        if binary:
+            with gmsh_session():
+                build_boxes("tet", 1)
+                gmsh.option.setNumber("Mesh.Binary", 1)
+                write(path)
+            data = bytearray(path.read_bytes())
+            at = data.index(b"\n$Nodes\n") + 8  # numEntityBlocks numNodes min max (size_t)
+            data[at + 8:at + 16] = np.array([10**12], "<u8").tobytes()
+        else:
+            data = re.sub(rb"\$Nodes\n(\d+) \d+", rb"$Nodes\n\1 1000000000000",
+                          boxes_file.read_bytes(), count=1)
+        path.write_bytes(bytes(data))
+
+    on_root(make)
+    expect_error(path, ["lower"], r"huge_.*declares 1000000000000 nodes")
 
 
 def test_no_named_groups(shared_dir):
