@@ -11,8 +11,9 @@
 #   1. rootfs: a tarball cached OUTSIDE the repository
 #      ($DOLFINX_FRICTION_ROOTFS_CACHE, default /var/cache/dolfinx_friction/
 #      trixie-rootfs.tar), built with mmdebstrap (installed with apt-get when
-#      missing) from the Debian mirror this machine's apt sources use; rebuilt
-#      when the package list below changes (a stamp file next to it).
+#      missing) from the Debian mirror this machine's apt sources use (it stops
+#      with one line when they name none: no fallback address); rebuilt when the
+#      package list below changes (a stamp file next to it).
 #   2. unpack it into a temporary directory, copy the working tree in (no .git,
 #      .venv, caches or results), bind-mount /proc, /sys, /dev, /dev/pts, /dev/shm;
 #      a trap unmounts them and removes the directory on any exit.
@@ -78,22 +79,20 @@ done
 [[ "$(id -u)" -eq 0 ]] || die "needs root (chroot, bind mounts, mmdebstrap in root mode)"
 
 # ------------------------------------------------------------------ stage 1: rootfs
-# The Debian mirror of this machine's apt sources (deb822 or one-line format).
+# The Debian mirror of this machine's apt configuration: the URI of the binary
+# source that serves this machine's own suite (VERSION_CODENAME of /etc/os-release)
+# with component main, as apt itself reads its sources (one-line sources.list and
+# deb822 .sources alike, disabled entries skipped).  Prints nothing when there is
+# none: there is no fallback address.
 debian_mirror() {
-    local f uri
-    for f in /etc/apt/sources.list /etc/apt/sources.list.d/*.list /etc/apt/sources.list.d/*.sources; do
-        [[ -r "$f" ]] || continue
-        uri="$(awk '
-            /^[[:space:]]*#/ { next }
-            /^URIs:/ { for (i = 2; i <= NF; i++) if ($i ~ /\/debian\/?$/) { print $i; exit } }
-            /^deb[[:space:]]/ { for (i = 2; i <= NF; i++) if ($i ~ /^[a-z+]+:\/\/.*\/debian\/?$/) { print $i; exit } }
-        ' "$f")"
-        if [[ -n "$uri" ]]; then
-            printf '%s\n' "${uri%/}"
-            return
-        fi
-    done
-    printf '%s\n' http://deb.debian.org/debian
+    local codename
+    codename="$(. /etc/os-release 2>/dev/null && printf '%s' "${VERSION_CODENAME:-}")" || true
+    [[ -n "$codename" ]] || return 0
+    { apt-get indextargets --no-release-info \
+          --format '$(TARGET_OF) $(RELEASE) $(COMPONENT) $(REPO_URI)' 2>/dev/null || true; } \
+        | awk -v suite="$codename" '
+            !found && $1 == "deb" && $2 == suite && $3 == "main" && $4 ~ /^[a-z+]+:\/\// {
+                sub(/\/$/, "", $4); print $4; found = 1 }'
 }
 
 want_stamp="$(printf '%s\n' "$SUITE" "${PACKAGES[@]}" | sha256sum | cut -d' ' -f1)"
@@ -109,6 +108,9 @@ build_rootfs() {
             || die "cannot install mmdebstrap"
     fi
     mirror="$(debian_mirror)"
+    [[ -n "$mirror" ]] || die "no Debian mirror in this machine's apt sources (no 'deb' source" \
+        "of suite $(. /etc/os-release 2>/dev/null; echo "${VERSION_CODENAME:-?}") with component" \
+        "main in /etc/apt/sources.list or /etc/apt/sources.list.d/): add one, or build elsewhere"
     say "building the $SUITE rootfs from $mirror into $TARBALL (takes a few minutes)"
     mkdir -p "$CACHE_DIR"
     tmp="$TARBALL.partial.$$"
