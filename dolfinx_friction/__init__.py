@@ -1,2 +1,32 @@
-"""Node-to-surface penalty contact with Coulomb friction for DOLFINx."""
+"""Node-to-surface penalty contact with Coulomb friction for DOLFINx.
+
+The building blocks for a FEniCSx script (see the README, "Using the contact in your own
+FEniCSx code"): :class:`NodeToSurface` (one contact pair on the user's spaces and facet
+tags), :class:`Surface`, the rigid obstacles :func:`rigid_plane`, :func:`rigid_sphere`,
+:func:`rigid_cylinder`, :func:`create_matrix`; :class:`BlockProblem` (bodies given by
+UFL residuals, with contact), :class:`Newton`, :func:`solve_steps`, :func:`snes_solve`.
+They import dolfinx on first use.
+"""
 __version__ = "0.1.0"
+
+_PUBLIC = {
+    "NodeToSurface": "pair", "Surface": "pair", "ContactState": "pair",
+    "ContactSetupError": "pair", "rigid_plane": "pair", "rigid_sphere": "pair",
+    "rigid_cylinder": "pair", "create_matrix": "pair", "NO_ELEMENT": "pair",
+    "BlockProblem": "nonlinear", "Newton": "nonlinear", "NewtonResult": "nonlinear",
+    "solve_steps": "nonlinear", "snes_solve": "nonlinear", "IncrementRecord": "nonlinear",
+    "ConvergenceError": "nonlinear",
+    "Linear": "contact.laws", "Exponential": "contact.laws", "Tabular": "contact.laws",
+}
+__all__ = sorted(_PUBLIC)
+
+
+def __getattr__(name: str):
+    if name not in _PUBLIC:
+        raise AttributeError(f"module 'dolfinx_friction' has no attribute {name!r}")
+    import importlib
+    return getattr(importlib.import_module(f"dolfinx_friction.{_PUBLIC[name]}"), name)
+
+
+def __dir__():
+    return sorted(list(globals()) + __all__)

@@ -143,6 +143,9 @@ def _facets(surface: Surface, role: str, comm: MPI.Comm) -> np.ndarray:
         raise ContactSetupError(f"{role}: the tags have dimension {surface.tags.dim}, facets "
                                 f"of this mesh have {mesh.topology.dim - 1}")
     facets = compat.tagged(surface.tags, surface.value)
+    # each facet on one rank only: its owner (a ghost facet would count twice in the
+    # slave areas and appear twice as a master face)
+    facets = facets[facets < mesh.topology.index_map(mesh.topology.dim - 1).size_local]
     if not comm.allreduce(len(facets)):
         present = sorted(set().union(*comm.allgather(set(np.unique(surface.tags.values)
                                                           .tolist()))))
@@ -209,8 +212,7 @@ class NodeToSurface:
                     raise ContactSetupError(f"{name}: the obstacle's {key} has {len(v)} "
                                             f"components, the mesh is {self.gdim}D")
             self._master_field = None
-            self.obstacle_translation = np.zeros(self.gdim)
-            master_side = RigidMaster(master, None, self.obstacle_translation)
+            master_side = RigidMaster(master, None, np.zeros(self.gdim))
         else:
             master_facets = _facets(master, f"{name}: master", comm)
             if master.V.mesh is slave.V.mesh:
@@ -234,6 +236,22 @@ class NodeToSurface:
         #: changes whenever the candidate couplings (the matrix pattern) change
         self.couplings_version = 0
         self._matrices: dict[int, int] = {}
+
+    @property
+    def obstacle_translation(self) -> np.ndarray:
+        """(gdim,) prescribed translation of the rigid obstacle [length]; set it (e.g. in
+        the load function of an increment) before :meth:`begin`."""
+        master = self._interaction.master
+        if not isinstance(master, RigidMaster):
+            raise AttributeError(f"{self.name}: the master is not a rigid obstacle")
+        return master.translation.copy()
+
+    @obstacle_translation.setter
+    def obstacle_translation(self, value: Sequence[float]) -> None:
+        master = self._interaction.master
+        if not isinstance(master, RigidMaster):
+            raise AttributeError(f"{self.name}: the master is not a rigid obstacle")
+        master.translation[:] = _vector(value, f"{self.name}: obstacle translation")
 
     # ------------------------------------------------------------- set-up
     def _parameters(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
