@@ -1,0 +1,261 @@
+"""The public contact API on the user's own dolfinx spaces and UFL residuals.
+
+Neo-Hookean bodies (CalculiX's NEO HOOKE, plane strain) on a rigid plane and on a
+deformable Neo-Hookean foundation, through ``NodeToSurface`` + ``BlockProblem``: the
+global Jacobian against central differences of the global residual, quadratic
+convergence, SNES against the project's Newton, the user's own Newton loop against
+``solve_steps``, and one-line errors for bad input.  Serial and under ``mpirun -n 2``.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import ufl
+from dolfinx import fem, mesh
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx_friction import (BlockProblem, ContactSetupError, Newton, NodeToSurface, Surface,
+                              create_matrix, rigid_plane, snes_solve, solve_steps)
+from dolfinx_friction import compat
+
+E, NU = 1000.0, 0.3
+BOTTOM, TOP = 1, 2
+
+
+def neo_hookean(u, v):
+    """Plane-strain residual of W = C10 (I1bar - 3) + (J - 1)^2 / D1 (CalculiX)."""
+    mu, kappa = E / (2 * (1 + NU)), E / (3 * (1 - 2 * NU))
+    F2 = ufl.variable(ufl.Identity(2) + ufl.grad(u))
+    F = ufl.as_matrix([[F2[0, 0], F2[0, 1], 0], [F2[1, 0], F2[1, 1], 0], [0, 0, 1]])
+    J = ufl.det(F)
+    W = mu / 2 * (J ** (-2 / 3) * ufl.tr(F.T * F) - 3) + kappa / 2 * (J - 1) ** 2
+    return ufl.inner(ufl.diff(W, F2), ufl.grad(v)) * ufl.dx
+
+
+def block(x0, y0, width, height, nx, ny, cell=mesh.CellType.quadrilateral, degree=1):
+    """A rectangle with its bottom edge tagged BOTTOM and top edge TOP."""
+    m = mesh.create_rectangle(MPI.COMM_WORLD, [[x0, y0], [x0 + width, y0 + height]], [nx, ny],
+                              cell)
+    facets, values = [], []
+    for y, tag in ((y0, BOTTOM), (y0 + height, TOP)):
+        f = mesh.locate_entities_boundary(m, 1, lambda x, y=y: np.isclose(x[1], y))
+        facets.append(f)
+        values.append(np.full(len(f), tag, dtype=np.int32))
+    facets, values = np.concatenate(facets), np.concatenate(values)
+    order = np.argsort(facets)
+    tags = mesh.meshtags(m, 1, facets[order].astype(np.int32), values[order])
+    V = compat.vector_space(m, degree)
+    return V, tags
+
+
+def on_plane(degree=1, cell=mesh.CellType.quadrilateral, mu=0.3):
+    """A Neo-Hookean block held at its top, on a rigid plane that rises and slides."""
+    V, tags = block(0.0, 0.0, 1.0, 0.5, 8, 4, cell, degree)
+    u = fem.Function(V)
+    held = fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(V, 1, tags.find(TOP)), V)
+    contact = NodeToSurface(Surface(V, tags, BOTTOM), rigid_plane([0, 0], [0, 1]), E=E,
+                            K=100 * E / 0.125, stick_slope=10 * E / 0.125, mu=mu)
+    return BlockProblem([neo_hookean(u, ufl.TestFunction(V))], [u], [held], [contact]), contact
+
+
+def two_bodies(mu=0.3):
+    """A Neo-Hookean block pressed by its top onto a Neo-Hookean foundation and slid."""
+    Vb, tb = block(0.2, 0.4, 0.6, 0.3, 6, 3)
+    Vf, tf = block(0.0, 0.0, 1.0, 0.4, 9, 4, mesh.CellType.triangle)
+    ub, uf = fem.Function(Vb), fem.Function(Vf)
+    g = fem.Constant(Vb.mesh, np.zeros(2))
+    bcs = [fem.dirichletbc(g, fem.locate_dofs_topological(Vb, 1, tb.find(TOP)), Vb),
+           fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(Vf, 1, tf.find(BOTTOM)),
+                           Vf)]
+    contact = NodeToSurface(Surface(Vb, tb, BOTTOM), Surface(Vf, tf, TOP), E=E,
+                            K=100 * E / 0.1, stick_slope=10 * E / 0.1, mu=mu)
+    residuals = [neo_hookean(ub, ufl.TestFunction(Vb)), neo_hookean(uf, ufl.TestFunction(Vf))]
+    return BlockProblem(residuals, [ub, uf], bcs, [contact]), contact, g
+
+
+def press_and_slide(problem, contact, g=None, depth=0.03, slide=0.02, increments=(3, 2)):
+    def press(t):
+        if g is None:
+            contact.obstacle_translation = (0.0, depth * t)
+        else:
+            g.value[:] = (0.0, -depth * t)
+
+    def drag(t):
+        if g is None:
+            contact.obstacle_translation = (slide * t, depth)
+        else:
+            g.value[:] = (slide * t, -depth)
+    records = solve_steps(problem, press, increments[0])
+    return records + solve_steps(problem, drag, increments[1])
+
+
+def residual_at(problem, contact, x, b):
+    contact.update(x, pairing=False)
+    problem.residual(x, b)
+
+
+def fd_error(problem, contact, seed=0) -> float:
+    """max over 3 random directions of |J dv - central difference| / |J dv| at a perturbed
+    iterate (mixed stick/slip, pairing frozen)."""
+    rng = np.random.default_rng(seed + MPI.COMM_WORLD.rank)
+    start = problem.x.copy()
+    n = start.getLocalSize()
+    scale = MPI.COMM_WORLD.allreduce(np.abs(start.getArray()).max(initial=0.0), op=MPI.MAX)
+    problem.x.setArray(start.getArray() + 1e-3 * scale * rng.standard_normal(n))
+    problem.apply_bcs()  # dolfinx's lifted residual is consistent with J where x = g on bcs
+    x = problem.x.copy()
+    for c in problem.contacts:
+        c.begin(x, start=start)
+        c.update(x)
+    A = problem.jacobian(x)
+    worst = 0.0
+    b_plus, b_minus, Jdv = x.duplicate(), x.duplicate(), x.duplicate()
+    for _ in range(3):
+        dv = x.duplicate()
+        dv.setArray(rng.standard_normal(n))
+        h = 1e-6 * scale / dv.norm(PETSc.NormType.INFINITY)
+        xp, xm = x.copy(), x.copy()
+        xp.axpy(h, dv)
+        xm.axpy(-h, dv)
+        residual_at(problem, contact, xp, b_plus)
+        residual_at(problem, contact, xm, b_minus)
+        b_plus.axpy(-1.0, b_minus)
+        b_plus.scale(1.0 / (2 * h))
+        A.mult(dv, Jdv)
+        b_plus.axpy(-1.0, Jdv)
+        worst = max(worst, b_plus.norm() / Jdv.norm())
+    return worst
+
+
+def statuses(contact) -> set:
+    found = set(contact.state().status.tolist())
+    return set().union(*MPI.COMM_WORLD.allgather(found))
+
+
+@pytest.mark.parametrize("degree, cell", [(1, mesh.CellType.quadrilateral),
+                                          (2, mesh.CellType.triangle)])
+def test_jacobian_on_rigid_plane_matches_central_differences(degree, cell):
+    problem, contact = on_plane(degree, cell)
+    press_and_slide(problem, contact, slide=0.02, increments=(2, 1))
+    err = fd_error(problem, contact)
+    print(f"\nNeo-Hookean P{degree} on a rigid plane, mu = 0.3: FD rel error {err:.2e}, "
+          f"statuses {sorted(statuses(contact))}")
+    assert {1, 2} <= statuses(contact)  # stick and slip nodes both tested
+    assert err < 1e-7
+
+
+def test_jacobian_two_bodies_matches_central_differences():
+    problem, contact, g = two_bodies()
+    press_and_slide(problem, contact, g, depth=0.02, slide=0.02, increments=(2, 1))
+    err = fd_error(problem, contact)
+    print(f"\nNeo-Hookean block on a Neo-Hookean foundation, mu = 0.3: FD rel error {err:.2e}, "
+          f"statuses {sorted(statuses(contact))}")
+    assert {1, 2} <= statuses(contact)
+    assert err < 1e-7
+
+
+def test_newton_converges_quadratically():
+    """One large increment (press deeper and slide, with friction) to a tight tolerance:
+    the order of the last iterations above the round-off floor."""
+    problem, contact = on_plane()
+    press_and_slide(problem, contact, slide=0.0, increments=(2, 1))
+    contact.obstacle_translation = (0.02, 0.05)
+    contact.begin(problem.x)
+    result = Newton(rtol=1e-15, atol=0.0).solve(problem)
+    r = np.array(result.residuals)
+    above_floor = [k for k in range(1, len(r) - 1) if r[k + 1] > 100 * r[-1]]
+    k = above_floor[-1]
+    order = np.log(r[k + 1] / r[k]) / np.log(r[k] / r[k - 1])
+    print(f"\nresiduals {np.array2string(r, precision=1)}: order {order:.2f}, "
+          f"statuses {sorted(statuses(contact))}")
+    assert result.converged and statuses(contact) & {1, 2}  # closed, with friction
+    assert order >= 1.8
+
+
+def test_snes_matches_newton():
+    answers = []
+    for use_snes in (False, True):
+        problem, contact = on_plane()
+        press_and_slide(problem, contact, slide=0.01, increments=(2, 1))
+        contact.obstacle_translation = (0.02, 0.03)
+        problem.apply_bcs()
+        contact.begin(problem.x)
+        if use_snes:
+            assert snes_solve(problem, options={"snes_rtol": 1e-12, "snes_atol": 1e-12}) > 0
+        else:
+            assert Newton(rtol=1e-12, atol=1e-12).solve(problem).converged
+        answers.append(contact.force())
+    print(f"\nforce Newton {answers[0]}, SNES {answers[1]}")
+    assert np.allclose(answers[0], answers[1], rtol=1e-9, atol=0.0)
+
+
+def test_own_newton_loop_matches_solve_steps():
+    """The loop of the module docstring of dolfinx_friction.pair, written by hand with
+    dolfinx's own assemblers on u.vector, gives what solve_steps gives."""
+    problem, contact = on_plane()
+    press_and_slide(problem, contact, slide=0.0, increments=(1, 1))  # no predictor
+    expected = contact.force()
+
+    V, tags = block(0.0, 0.0, 1.0, 0.5, 8, 4)
+    u, v = fem.Function(V), ufl.TestFunction(V)
+    held = fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(V, 1, tags.find(TOP)), V)
+    contact = NodeToSurface(Surface(V, tags, BOTTOM), rigid_plane([0, 0], [0, 1]), E=E,
+                            K=100 * E / 0.125, stick_slope=10 * E / 0.125, mu=0.3)
+    R = neo_hookean(u, v)
+    F, J = compat.form(R), compat.form(ufl.derivative(R, u))
+    x = compat.petsc_vector(u)
+    b, dx = x.duplicate(), x.duplicate()
+    ksp = PETSc.KSP().create(MPI.COMM_WORLD)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    for t in (1.0, 1.0):  # the press in one increment, the slide step of 0
+        contact.obstacle_translation = (0.0, 0.03 * t)
+        contact.begin(x)
+        A = create_matrix(J, [contact])
+        for _ in range(20):
+            contact.update(x)
+            compat.assemble_residual_into(b, F, J, [held], x)
+            contact.add_residual(b, [held])
+            if b.norm() < 1e-10:
+                break
+            A.zeroEntries()
+            compat.assemble_matrix_into(A, J, [held])
+            contact.add_jacobian(A, [held])
+            ksp.setOperators(A)
+            ksp.solve(b, dx)
+            x.axpy(-1.0, dx)
+            x.ghostUpdate(PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+        contact.commit()
+    print(f"\nown loop {contact.force()}, solve_steps {expected}")
+    assert np.allclose(contact.force(), expected, rtol=1e-9)
+    # the matrix of the form alone has no room for the couplings: one clear error
+    plain = compat.create_matrix(J)
+    compat.assemble_matrix_into(plain, J, [held])
+    with pytest.raises(ContactSetupError, match="no slots for the current contact couplings"):
+        contact.add_jacobian(plain, [held])
+
+
+def test_bad_input_gets_one_clear_line():
+    V, tags = block(0.0, 0.0, 1.0, 0.5, 4, 2)
+    plane = rigid_plane([0, 0], [0, 1])
+    cases = [
+        (lambda: NodeToSurface(Surface(V, tags, 7), plane, E=E), "no facet is tagged 7"),
+        (lambda: NodeToSurface(Surface(compat.scalar_space(V.mesh, 1), tags, BOTTOM), plane,
+                               E=E), "vector space"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), Surface(V, tags, BOTTOM), E=E),
+         "share facets"),
+        (lambda: rigid_plane([0, 0], [0, 0]), "normal is zero"),
+        (lambda: rigid_plane([0, 0], [0, 1e-200]), "normal is zero"),
+        (lambda: rigid_plane([0, np.nan], [0, 1]), "finite"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=-0.3), "mu must be"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, mu=0.3), "give E"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), rigid_plane([0, 0, 0], [0, 0, 1]),
+                               E=E), "3 components"),
+    ]
+    for make, text in cases:
+        with pytest.raises(ContactSetupError) as info:
+            make()
+        message = str(info.value)
+        assert text in message and "\n" not in message, message
