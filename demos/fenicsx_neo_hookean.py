@@ -90,11 +90,11 @@ def slide(t):
 
 def reporter(step, name):
     def report(increment):
-        force = -contact.force()  # the force of the block on the plane
+        force = contact.force()  # of the plane on the block
         closed, slipping = contact.counts()
         if comm.rank == 0:
             print(f"{name} t = {increment.t:5.3f}  Newton {increment.iterations}  "
-                  f"F_n = {force[1]:9.4f}  F_t = {force[0]:9.4f}  "
+                  f"F_n = {force[1]:.10g}  F_t = {force[0]:.10g}  "
                   f"F_t/F_n = {force[0] / force[1]:.10f}  contact {closed}, slip {slipping}")
         for f in [u, *contact.fields().values()]:
             xdmf.write_function(f, step + increment.t)

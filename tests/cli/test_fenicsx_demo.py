@@ -1,0 +1,54 @@
+"""demos/fenicsx_neo_hookean.py (the public API in a plain FEniCSx script) on 1, 2 and 3
+ranks: in full slip the drag over the press force is mu = 0.3 (1e-8), every printed force
+is the serial one (1e-8), and the XDMF time series is written.  Started from a serial
+pytest only (it launches its own ranks)."""
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from tests.cli.test_cli import TIMEOUT, cli_env
+
+pytestmark = [
+    pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
+                       reason="launches mpirun itself: run from a serial pytest"),
+    pytest.mark.skipif(shutil.which("mpirun") is None, reason="mpirun not found"),
+]
+
+DEMO = Path(__file__).resolve().parents[2] / "demos" / "fenicsx_neo_hookean.py"
+LINE = re.compile(r"(press|slide) t = +([\d.]+) +Newton (\d+) +F_n = +(\S+) +F_t = +(\S+) +"
+                  r"F_t/F_n = +(\S+)")
+
+
+def _run(ranks: int, out: Path) -> np.ndarray:
+    """(increments, 3): F_n, F_t and F_t/F_n printed for every increment."""
+    from dolfinx_friction import compat
+    command = [sys.executable, str(DEMO), "--cells", "12", "--no-picture", "--out", str(out)]
+    env = cli_env()
+    if ranks > 1:
+        command = [*compat.mpirun_command(ranks), *command]
+        env = compat.mpirun_environment(env)
+    proc = subprocess.run(command, capture_output=True, text=True, env=env, timeout=TIMEOUT)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    rows = [m.groups() for m in map(LINE.match, proc.stdout.splitlines()) if m]
+    assert len(rows) == 15, proc.stdout
+    assert (out / "block.xdmf").exists() and (out / "block.h5").exists()
+    return np.array([[float(r[3]), float(r[4]), float(r[5])] for r in rows])
+
+
+def test_demo_full_slip_ratio_and_ranks(tmp_path):
+    serial = _run(1, tmp_path / "1")
+    print(f"\nlast increment: F_n = {serial[-1, 0]:.10g}, F_t = {serial[-1, 1]:.10g}, "
+          f"F_t/F_n = {serial[-1, 2]:.12f}")
+    assert abs(serial[-1, 2] - 0.3) < 1e-8
+    for ranks in (2, 3):
+        forces = _run(ranks, tmp_path / str(ranks))
+        scale = np.abs(serial[:, :2]).max()
+        assert np.abs(forces[:, :2] - serial[:, :2]).max() < 1e-8 * scale, (ranks, forces)
