@@ -13,9 +13,9 @@ _PUBLIC = {
     "NodeToSurface": "pair", "Surface": "pair", "ContactState": "pair",
     "ContactSetupError": "pair", "rigid_plane": "pair", "rigid_sphere": "pair",
     "rigid_cylinder": "pair", "create_matrix": "pair", "NO_ELEMENT": "pair",
-    "BlockProblem": "nonlinear", "Newton": "nonlinear", "NewtonResult": "nonlinear",
-    "solve_steps": "nonlinear", "snes_solve": "nonlinear", "IncrementRecord": "nonlinear",
-    "ConvergenceError": "nonlinear",
+    "BlockProblem": "system", "Newton": "newton", "NewtonTrace": "newton",
+    "snes_solve": "newton", "solve_steps": "stepping", "IncrementRecord": "stepping",
+    "ConvergenceError": "stepping",
     "Linear": "contact.laws", "Exponential": "contact.laws", "Tabular": "contact.laws",
 }
 __all__ = sorted(_PUBLIC)

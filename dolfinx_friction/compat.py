@@ -192,6 +192,12 @@ def petsc_vector(u):
     return u.x.petsc_vec if NEW_API else u.vector
 
 
+def create_vector(L):
+    """A ghosted PETSc vector for a compiled linear form."""
+    import dolfinx.fem.petsc
+    return dolfinx.fem.petsc.create_vector(L)
+
+
 def create_matrix(a):
     """An empty PETSc matrix with the sparsity of a compiled bilinear form."""
     import dolfinx.fem.petsc
@@ -204,6 +210,15 @@ def assemble_matrix_into(A, a, bcs=()) -> None:
     import dolfinx.fem.petsc
     dolfinx.fem.petsc.assemble_matrix(A, a, list(bcs))
     A.assemble()
+
+
+def assemble_vector_into(b, L) -> None:
+    """Add a compiled linear form into the ghosted vector ``b`` and sum the ghost
+    contributions onto their owners."""
+    import dolfinx.fem.petsc
+    from petsc4py import PETSc
+    dolfinx.fem.petsc.assemble_vector(b, L)
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
 
 
 def assemble_residual_into(b, L, a, bcs, x) -> None:
@@ -225,10 +240,11 @@ def set_bc_values(x, bcs) -> None:
     dolfinx.fem.petsc.set_bc(x, list(bcs))
 
 
-def bc_local_dofs(bc) -> np.ndarray:
-    """Local (unrolled, owned) dof indices of a DirichletBC."""
-    dofs, first_ghost = bc.dof_indices()
-    return np.asarray(dofs[:first_ghost], dtype=np.int64)
+def bc_local_dofs(bc, n_owned: int) -> np.ndarray:
+    """Local (unrolled) dof indices of a DirichletBC that are among the ``n_owned`` owned
+    dofs of its space."""
+    dofs = np.asarray(bc.dof_indices()[0], dtype=np.int64)
+    return dofs[dofs < n_owned]
 
 
 def bc_on_space(bc, V) -> bool:

@@ -177,6 +177,15 @@ class NodeToSurface:
     thickness : out-of-plane thickness of a 2D (plane) body, scales slave areas.
     pairing_iterations : Newton iterations per increment that re-pair slave nodes
         (CalculiX: 8; 1 is small sliding).
+    obstacle_index, n_obstacles : for a rigid obstacle whose translation is an unknown of
+        a :class:`~dolfinx_friction.BlockProblem` with ``obstacles=n_obstacles`` (force- or
+        displacement-driven): which one it is.  Default: a prescribed translation.
+
+    Attributes
+    ----------
+    ramp : share of the initial overclosures (found at the first pairing) still removed
+        from the clearances (contact-theory.md §3.4): ``1 - t`` in a first static step
+        that resolves them gradually, 0 otherwise (default).
     """
 
     def __init__(self, slave: Surface, master: Union[Surface, Rigid], *,
@@ -185,7 +194,8 @@ class NodeToSurface:
                  c0: Optional[float] = None, mu: float = 0.0,
                  stick_slope: Optional[float] = None, E: Optional[float] = None,
                  tangent: str = "consistent", thickness: float = 1.0,
-                 pairing_iterations: int = 8, name: str = "contact"):
+                 pairing_iterations: int = 8, name: str = "contact",
+                 obstacle_index: Optional[int] = None, n_obstacles: int = 0):
         comm = slave.V.mesh.comm
         self.comm, self.name = comm, name
         self.gdim = _check_space(slave.V, f"{name}: slave")
@@ -198,7 +208,7 @@ class NodeToSurface:
         self.spaces = list(spaces)
         self.params = self._parameters(law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
                                        pairing_iterations)
-        self.layout = DofLayout(comm, [V.dofmap.index_map for V in self.spaces], 0)
+        self.layout = DofLayout(comm, [V.dofmap.index_map for V in self.spaces], n_obstacles)
         slave_facets = _facets(slave, f"{name}: slave", comm)
         self._fields: list[BodyField] = []
         slave_field = self._field(slave.V, "slave", slave_facets, thickness)
@@ -212,7 +222,13 @@ class NodeToSurface:
                     raise ContactSetupError(f"{name}: the obstacle's {key} has {len(v)} "
                                             f"components, the mesh is {self.gdim}D")
             self._master_field = None
-            master_side = RigidMaster(master, None, np.zeros(self.gdim))
+            node = None
+            if obstacle_index is not None:
+                if not 0 <= obstacle_index < n_obstacles:
+                    raise ContactSetupError(f"{name}: obstacle_index {obstacle_index} is not "
+                                            f"one of the {n_obstacles} obstacles")
+                node = self.layout.rigid_node(obstacle_index)
+            master_side = RigidMaster(master, node, np.zeros(self.gdim))
         else:
             master_facets = _facets(master, f"{name}: master", comm)
             if master.V.mesh is slave.V.mesh:
@@ -228,6 +244,7 @@ class NodeToSurface:
         self._interaction = ContactInteraction(comm, name, self.params.element, slaves,
                                                master_side, self.gdim,
                                                self.params.pairing_iterations)
+        self.ramp = 0.0
         self._u_n: Optional[PETSc.Vec] = None
         self._saved: Optional[tuple] = None
         self._iteration = 0
@@ -310,8 +327,9 @@ class NodeToSurface:
         of every slave node at ``x``, the increment's first iterate.  ``start`` is the
         converged state the increment starts from (default ``x``): slip is measured
         from it."""
-        self._u_n = self._u_n or x.duplicate()
-        (start or x).copy(self._u_n)
+        if self._u_n is None:
+            self._u_n = x.duplicate()
+        (x if start is None else start).copy(self._u_n)
         self._saved = self._interaction.save()
         self._search(x, update_areas=True)
         self._iteration = 0
@@ -338,13 +356,14 @@ class NodeToSurface:
             inter.mark_off_surface()
         if pairing:
             self._iteration += 1
-        el = inter.evaluate(x, self._u_n)
+        inter.evaluate(x, self._u_n, self.ramp)
         self._u_slaves = inter.slave_displacements(x)
         return changed
 
     def commit(self) -> None:
         """Accept the increment: its trial friction history becomes the start state."""
         self._interaction.commit()
+        self._saved = None
 
     def rollback(self) -> None:
         """Forget the increment: restore the history saved by :meth:`begin`."""
@@ -387,7 +406,7 @@ class NodeToSurface:
                          None)
             if block is None:
                 continue  # a condition on another space: none of the contact's rows
-            local = compat.bc_local_dofs(bc)
+            local = compat.bc_local_dofs(bc, self.spaces[block].dofmap.index_map.size_local * d)
             own.append(self.layout.nodes(block)[local // d] * d + local % d)
         mine = np.concatenate(own) if own else np.zeros(0, np.int64)
         dofs = np.unique(np.concatenate(self.comm.allgather(mine)))
@@ -433,6 +452,15 @@ class NodeToSurface:
         A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
         A.setValuesRCV(dofs, dofs, el.result.K.reshape(-1, nd, nd), addv=PETSc.InsertMode.ADD)
         A.assemble()
+
+    def add_roundoff(self, s: PETSc.Vec) -> None:
+        """Add the size of the round-off of the contact forces (their sensitivity to the
+        coordinates, which carry the clearance) into ``s``, per dof (not assembled)."""
+        el = self._evaluated()
+        dofs = self._dofs()[el.candidate]
+        keep = dofs >= 0
+        s.setValues(dofs[keep].astype(PETSc.IntType), el.roundoff[keep],
+                    addv=PETSc.InsertMode.ADD)
 
     def couplings(self) -> tuple[np.ndarray, np.ndarray]:
         """Global ``(rows, cols)`` of every entry the contact tangent may fill until the
@@ -495,6 +523,30 @@ class NodeToSurface:
         """(gdim,) total contact force on the slave body, summed over all ranks
         (collective)."""
         return self.comm.allreduce(self.state().force.sum(axis=0))
+
+    def pairing(self) -> np.ndarray:
+        """(n, 2) status and global master face id of every owned slave node ((-1, -1)
+        without an element; face -1 on a rigid obstacle): what the Newton trace compares."""
+        return self._interaction.contact_state()
+
+    def penetration(self) -> float:
+        """Largest overclosure the law acts on, relative to the slave node spacing, over all
+        ranks (collective): a penalty too soft for the mesh shows here."""
+        return self.comm.allreduce(self._interaction.penetration(), op=MPI.MAX)
+
+    def detached(self) -> int:
+        """Slave nodes closed at the last commit that slid off the master surface in this
+        increment, over all ranks (collective)."""
+        return int(self.comm.allreduce(self._interaction.detached()))
+
+    def zone_vanished(self) -> bool:
+        """Whether all of a contact zone closed at the last commit is gone, with some of its
+        nodes off the master surface (collective): more often a diverging iterate that
+        threw the zone away than a real slide off the end."""
+        inter = self._interaction
+        before, now, off = self.comm.allreduce(
+            np.array([inter.closed.sum(), inter.counts()[0], inter.detached()]))
+        return bool(before > 0 and now == 0 and off > 0)
 
     def counts(self) -> tuple[int, int]:
         """Slave nodes in contact (closed) and slipping, over all ranks (collective)."""

@@ -1,0 +1,167 @@
+"""Newton's method for one increment of a :class:`~dolfinx_friction.BlockProblem`, or
+PETSc SNES instead.
+
+Each iteration pairs the contacts at the accepted iterate (in their first
+``pairing_iterations`` iterations), evaluates the residual and, unless converged,
+solves with the Jacobian.  Converged: the residual norm is below ``max(rtol r_0, atol)``
+or below its round-off floor.  The line search halves the step (at most 5 times, the
+pairing frozen) while the residual norm does not decrease.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+from petsc4py import PETSc
+
+from dolfinx_friction.linear import LinearSolver
+from dolfinx_friction.system import BlockProblem
+
+
+@dataclass
+class NewtonTrace:
+    """One Newton solve: ``residuals[k]`` is the residual norm at iterate k; in iteration
+    k + 1, ``status_changes[k]`` slave nodes changed their contact status (open, stick,
+    slip), ``face_changes[k]`` others only their master face, and the line search halved
+    the step ``backtracks[k]`` times."""
+
+    converged: bool = False
+    residuals: list[float] = field(default_factory=list)
+    status_changes: list[int] = field(default_factory=list)
+    face_changes: list[int] = field(default_factory=list)
+    backtracks: list[int] = field(default_factory=list)
+
+    @property
+    def iterations(self) -> int:
+        return len(self.backtracks)
+
+
+class Newton:
+    """Newton iterations from :attr:`BlockProblem.x` (contacts begun) to convergence.
+
+    ``prefix`` and ``petsc_options`` set the linear solver (default MUMPS, with the
+    factorisation kept as GMRES preconditioner where only contact changes the Jacobian:
+    see :mod:`dolfinx_friction.linear`).
+    """
+
+    def __init__(self, rtol: float = 1e-9, atol: float = 1e-10, max_iterations: int = 30,
+                 line_search: bool = True, prefix: str = "dolfinx_friction_",
+                 petsc_options: Optional[dict] = None,
+                 reuse_factorisation: Optional[bool] = None):
+        self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
+        self.line_search = line_search
+        self.prefix, self.petsc_options = prefix, petsc_options
+        self.reuse_factorisation = reuse_factorisation
+        self.linear: Optional[LinearSolver] = None
+
+    def _solver(self, problem: BlockProblem) -> LinearSolver:
+        if self.linear is None:
+            reuse = self.reuse_factorisation
+            if reuse is None and self.petsc_options is None:
+                reuse = problem.linear  # a kept factorisation pays where only contact changes
+            self.linear = LinearSolver(problem.comm, self.prefix, reuse, self.petsc_options)
+        return self.linear
+
+    @staticmethod
+    def _evaluate(problem: BlockProblem, pairing: bool) -> float:
+        t0 = time.perf_counter()
+        for c in problem.contacts:
+            c.update(problem.x, pairing=pairing)
+        problem.timers.add("contact_search", time.perf_counter() - t0)
+        return problem.residual(problem.x, problem.b)
+
+    def solve(self, problem: BlockProblem) -> NewtonTrace:
+        x, b = problem.x, problem.b
+        dx = x.duplicate()
+        trace = NewtonTrace()
+        before = None
+        for it in range(self.max_iterations + 1):
+            norm = self._evaluate(problem, True)  # pairing at the accepted iterate
+            trace.residuals.append(norm)
+            now = [c.pairing() for c in problem.contacts]
+            if before is not None:
+                _record_changes(problem, before, now, trace)
+            before = now
+            if not np.isfinite(norm):
+                break
+            target = max(self.rtol * trace.residuals[0], self.atol)
+            if norm <= max(target, problem.floor):
+                trace.converged = True
+                break
+            if it == self.max_iterations:
+                break
+            A = problem.jacobian(x)
+            t0 = time.perf_counter()
+            solved = self._solver(problem).solve(A, b, dx)
+            problem.timers.add("linear_solve", time.perf_counter() - t0)
+            if not solved:
+                trace.backtracks.append(0)
+                break
+            x.axpy(-1.0, dx)
+            trace.backtracks.append(self._line_search(problem, dx, norm, target)
+                                    if self.line_search else 0)
+        dx.destroy()
+        return trace
+
+    def _line_search(self, problem: BlockProblem, dx: PETSc.Vec, norm0: float,
+                     target: float) -> int:
+        """Halve the step ``x <- x - dx`` while the residual (pairing frozen) does not
+        decrease and is not converged (at round-off it need not decrease); returns the
+        halvings."""
+        alpha = 1.0
+        for halvings in range(5):
+            norm = self._evaluate(problem, False)
+            if norm <= max((1.0 - 1e-4 * alpha) * norm0, target, problem.floor):
+                return halvings
+            alpha *= 0.5
+            problem.x.axpy(alpha, dx)  # back from x - 2 alpha dx to x - alpha dx
+        return 5
+
+
+def _record_changes(problem: BlockProblem, before: list, now: list, trace: NewtonTrace) -> None:
+    """Count (all ranks) the slave nodes whose status, or else only master face, changed."""
+    counts = np.zeros(2, dtype=np.int64)
+    for old, new in zip(before, now):
+        differs = old != new
+        counts += differs[:, 0].sum(), (differs[:, 1] & ~differs[:, 0]).sum()
+    status, face = problem.comm.allreduce(counts)
+    trace.status_changes.append(int(status))
+    trace.face_changes.append(int(face))
+
+
+def snes_solve(problem: BlockProblem, prefix: str = "dolfinx_friction_snes_",
+               options: Optional[dict] = None) -> int:
+    """Solve an increment with PETSc SNES (``newtonls`` unless the options say otherwise;
+    every SNES/KSP option and monitor under ``prefix`` applies).  The contacts must have
+    begun; they are paired at every residual evaluation, without a new search (the
+    couplings stay those of :meth:`BlockProblem.matrix`).  Returns SNES's converged
+    reason (> 0: converged)."""
+    opts = PETSc.Options()
+    defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "ksp_type": "preonly",
+                "pc_type": "lu", "pc_factor_mat_solver_type": "mumps", "snes_rtol": 1e-9,
+                "snes_atol": 1e-10}
+    for key, value in {**defaults, **(options or {})}.items():
+        if not opts.hasName(prefix + key):
+            opts[prefix + key] = value
+    snes = PETSc.SNES().create(problem.comm)
+    snes.setOptionsPrefix(prefix)
+
+    def residual(_snes, x, b):
+        for c in problem.contacts:
+            c.update(x, search=False)
+        problem.residual(x, b)
+
+    def jacobian(_snes, x, A, P):
+        problem.jacobian(x, A)
+
+    A = problem.matrix()
+    snes.setFunction(residual, problem.b.duplicate())
+    snes.setJacobian(jacobian, A, A)
+    snes.setFromOptions()
+    snes.solve(None, problem.x)
+    reason = snes.getConvergedReason()
+    snes.destroy()
+    problem.scatter()
+    return reason

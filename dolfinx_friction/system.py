@@ -1,0 +1,364 @@
+"""Bodies given by UFL residuals, coupled by contact, as one block system.
+
+:class:`BlockProblem` joins one residual form ``F_i(u_i; v_i)`` per body into one
+system.  The unknown is one PETSc vector :attr:`~BlockProblem.x`: the bodies' owned dofs
+joined rank by rank, as dolfinx joins blocks (on each rank, the owned dofs of body 0, then
+body 1, ...), then the translations of the rigid obstacles that are unknowns (rank 0).
+The residual is ``R(x) = sum_i F_i(u_i) - f_ext + contact forces`` with zeros in the
+constrained rows; the Jacobian is dolfinx's compiled assembly of every body's Jacobian,
+plus the contact tangents, with identity rows where constrained.  A body whose Jacobian
+does not depend on its displacement (a linear form) has it assembled once.
+
+``x`` is the one copy of the displacement: the bodies' Functions are refreshed from it
+(:meth:`~BlockProblem.scatter`) at every evaluation.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Optional, Sequence
+
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx_friction import compat
+from dolfinx_friction.assembly import CooPattern
+from dolfinx_friction.fields import DofLayout
+from dolfinx_friction.pair import ContactSetupError, NodeToSurface
+
+#: Residual norms below this many round-off units of the terms they sum (|J| |x| + |f_ext|
+#: + the contact forces' sensitivity to the coordinates) are converged: Newton cannot
+#: reduce them further.
+ROUNDOFF_FLOOR = 2 * np.finfo(float).eps
+
+
+@dataclass
+class Timers:
+    """Wall time per phase, seconds."""
+
+    phases: dict = field(default_factory=lambda: dict.fromkeys(
+        ["setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
+         "output"], 0.0))
+
+    def add(self, phase: str, seconds: float) -> None:
+        self.phases[phase] += seconds
+
+
+def _is_linear(jacobian: ufl.Form, u) -> bool:
+    """Whether a Jacobian form does not depend on ``u`` (its body is linear)."""
+    from ufl.algorithms import expand_derivatives
+    return not expand_derivatives(ufl.derivative(jacobian, u)).integrals()
+
+
+class _Body:
+    """One block: compiled residual and Jacobian forms, its own vector and matrix."""
+
+    def __init__(self, F: ufl.Form, u, J: Optional[ufl.Form], bcs: Sequence):
+        V = u.function_space
+        J = J if J is not None else ufl.derivative(F, u)
+        self.u, self.V, self.bcs = u, V, list(bcs)
+        self.linear = _is_linear(J, u)
+        self.F, self.J = compat.form(F), compat.form(J)
+        self.b = compat.create_vector(self.F)
+        self.A = compat.create_matrix(self.J)
+        self.n_owned = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+
+    def residual(self) -> np.ndarray:
+        """Owned values of ``F(u)`` (ghost contributions summed)."""
+        with self.b.localForm() as local:
+            local.set(0.0)
+        compat.assemble_vector_into(self.b, self.F)
+        return self.b.getArray(readonly=True)[: self.n_owned]
+
+    def jacobian_values(self) -> np.ndarray:
+        """CSR values of the body's Jacobian at its current ``u`` (no bcs)."""
+        self.A.zeroEntries()
+        compat.assemble_matrix_into(self.A, self.J)
+        return self.A.getValuesCSR()[2]
+
+
+class BlockProblem:
+    """Residual and Jacobian of several bodies with contact, in one block numbering.
+
+    Parameters
+    ----------
+    residuals : one UFL residual form per body, ``F_i(u_i; v_i)`` (internal minus
+        external virtual work), linear in the test function.
+    u : the bodies' displacement Functions (vector Lagrange spaces of the mesh dimension);
+        their values are the initial guess and, after a solve, the solution.
+    bcs : dolfinx DirichletBCs of any of the bodies' spaces; their current values are
+        written into :attr:`x` by :meth:`apply_bcs`, and their rows are constrained.
+    contacts : :class:`NodeToSurface` pairs built with ``spaces`` = the bodies' spaces in
+        this order (the default for a pair whose slave and master are the first bodies).
+    jacobians : optional Jacobian forms per body (None: ``ufl.derivative(F_i, u_i)``).
+    obstacles : rigid obstacles whose translations are unknowns (pairs built with
+        ``n_obstacles`` = this and their ``obstacle_index``); their rows get the contact
+        forces minus :attr:`f_ext`, or are constrained (:meth:`prescribe`).
+    """
+
+    def __init__(self, residuals: Sequence[ufl.Form], u: Sequence, bcs: Sequence = (),
+                 contacts: Sequence[NodeToSurface] = (),
+                 jacobians: Optional[Sequence[Optional[ufl.Form]]] = None,
+                 obstacles: int = 0):
+        if len(residuals) != len(u):
+            raise ContactSetupError(f"{len(residuals)} residual forms for {len(u)} bodies")
+        self.spaces = [w.function_space for w in u]
+        self.comm = self.spaces[0].mesh.comm
+        self.gdim = self.spaces[0].mesh.geometry.dim
+        for V in self.spaces:
+            if V.dofmap.index_map_bs != self.gdim:
+                raise ContactSetupError("every body needs a vector space of the mesh dimension")
+        for c in contacts:
+            if len(c.spaces) != len(self.spaces) or any(
+                    a is not b for a, b in zip(c.spaces, self.spaces)):
+                raise ContactSetupError(f"{c.name}: built on other spaces than the problem's "
+                                        f"bodies (pass spaces=[...] in the bodies' order)")
+            if c.layout.n_global != DofLayout(
+                    self.comm, [V.dofmap.index_map for V in self.spaces], obstacles).n_global:
+                raise ContactSetupError(f"{c.name}: built for another number of obstacles")
+        self.bcs, self.contacts, self.n_obstacles = list(bcs), list(contacts), obstacles
+        jacobians = jacobians or [None] * len(u)
+        self.bodies = [_Body(F, w, J, [bc for bc in bcs
+                                       if compat.bc_on_space(bc, w.function_space)])
+                       for F, w, J in zip(residuals, u, jacobians)]
+        self.layout = DofLayout(self.comm, [V.dofmap.index_map for V in self.spaces], obstacles)
+        n = self.layout.n_owned * self.gdim
+        self.x = PETSc.Vec().createMPI((n, PETSc.DETERMINE), comm=self.comm)
+        self.b = self.x.duplicate()
+        self._scale = self.x.duplicate()
+        #: external forces on the owned rows (loads on the bodies, forces on obstacles)
+        self.f_ext = np.zeros(n)
+        #: the rows' internal forces (residual + f_ext, before constraining) at the last
+        #: evaluation: reactions are their sums over the constrained rows of a group
+        self.internal = np.zeros(n)
+        self.timers = Timers()
+        self._bc_rows = self._dolfinx_bc_rows()
+        self._prescribed_rows = np.zeros(0, dtype=np.int64)
+        self._prescribed_values = np.zeros(0)
+        self.gather()
+        self._base = self._bulk_pattern()
+        self._linear_data = {k: self._base.gather_values(k, body.jacobian_values())
+                             for k, body in enumerate(self.bodies) if body.linear}
+        self._pattern: Optional[CooPattern] = None
+        self._versions: Optional[list[int]] = None
+        self._J: Optional[PETSc.Mat] = None
+        self._abs: Optional[PETSc.Mat] = None  # |J_bulk|, for the round-off floor
+        self._abs_data: Optional[np.ndarray] = None
+        self._bulk_data: Optional[np.ndarray] = None  # bulk Jacobian values (last, or constant)
+        self._bc_slots: Optional[tuple] = None
+        self._modes: Optional[PETSc.NullSpace] = None
+        self.floor = 0.0
+        self._spring = 0.0
+
+    @property
+    def linear(self) -> bool:
+        """Whether every body is linear (only the contact changes the Jacobian)."""
+        return all(b.linear for b in self.bodies)
+
+    # ------------------------------------------------------------ numbering
+    def block_slice(self, k: int) -> slice:
+        """Body ``k``'s owned dofs in this rank's part of :attr:`x`."""
+        return self.layout.owned_slice(k, self.gdim)
+
+    def obstacle_rows(self, k: int) -> np.ndarray:
+        """(gdim,) local rows of obstacle ``k``'s translation on rank 0; empty elsewhere."""
+        if self.comm.rank != 0:
+            return np.zeros(0, dtype=np.int64)
+        node = self.layout.rigid_node(k) - self.layout.start
+        return node * self.gdim + np.arange(self.gdim)
+
+    def scatter(self, x: Optional[PETSc.Vec] = None) -> None:
+        """Copy the block vector (default :attr:`x`) into the bodies' Functions."""
+        values = (self.x if x is None else x).getArray(readonly=True)
+        for k, body in enumerate(self.bodies):
+            body.u.x.array[: body.n_owned] = values[self.block_slice(k)]
+            compat.scatter_forward(body.u)
+
+    def gather(self) -> None:
+        """Copy the bodies' Functions into :attr:`x`."""
+        values = self.x.getArray()
+        for k, body in enumerate(self.bodies):
+            values[self.block_slice(k)] = body.u.x.array[: body.n_owned]
+        self.x.setArray(values)
+
+    def _dolfinx_bc_rows(self) -> np.ndarray:
+        rows = []
+        for k, body in enumerate(self.bodies):
+            start = self.block_slice(k).start
+            rows += [start + compat.bc_local_dofs(bc, body.n_owned) for bc in body.bcs]
+        return np.unique(np.concatenate(rows)) if rows else np.zeros(0, dtype=np.int64)
+
+    # ------------------------------------------------------------ constraints
+    def prescribe(self, rows: np.ndarray, values: np.ndarray) -> None:
+        """Constrain owned rows (local indices of :attr:`x`) to values, besides the
+        dolfinx bcs; :meth:`apply_bcs` writes them into :attr:`x`."""
+        self._prescribed_rows = np.asarray(rows, dtype=np.int64)
+        self._prescribed_values = np.asarray(values, dtype=float)
+
+    @property
+    def constrained_rows(self) -> np.ndarray:
+        """Local rows of :attr:`x` held by the bcs and :meth:`prescribe`."""
+        if not len(self._prescribed_rows):
+            return self._bc_rows
+        return np.union1d(self._bc_rows, self._prescribed_rows)
+
+    def apply_bcs(self) -> None:
+        """Write the current values of the Dirichlet conditions into :attr:`x`."""
+        if self.bcs:
+            self.scatter()
+            for body in self.bodies:
+                compat.set_bc_values(compat.petsc_vector(body.u), body.bcs)
+            self.gather()
+        if len(self._prescribed_rows):
+            values = self.x.getArray()
+            values[self._prescribed_rows] = self._prescribed_values
+            self.x.setArray(values)
+
+    def free_obstacle_rows(self) -> np.ndarray:
+        rows = np.concatenate([self.obstacle_rows(k) for k in range(self.n_obstacles)]
+                              + [np.zeros(0, np.int64)])
+        return np.setdiff1d(rows, self._prescribed_rows)
+
+    # ------------------------------------------------------------ assembly
+    def _bulk_pattern(self) -> CooPattern:
+        d = self.gdim
+        blocks = []
+        for k, body in enumerate(self.bodies):
+            compat.assemble_matrix_into(body.A, body.J)
+            indptr, cols, _ = body.A.getValuesCSR()
+            rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+            cols = cols.astype(np.int64)
+            blocks.append((self.layout.nodes(k)[rows // d] * d + rows % d,
+                           self.layout.from_block_global(k, cols // d) * d + cols % d))
+        return CooPattern(self.comm, self.layout.n_owned * d, blocks)
+
+    def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> float:
+        """``b = R(x)``: the bodies' residuals minus :attr:`f_ext` plus the contact forces
+        at their last :meth:`NodeToSurface.update`, zero in constrained rows.  Also sets
+        :attr:`internal` and the round-off :attr:`floor`; returns ``|b|``."""
+        t0 = time.perf_counter()
+        self.scatter(x)
+        values = np.zeros(self.layout.n_owned * self.gdim)
+        for k, body in enumerate(self.bodies):
+            values[self.block_slice(k)] = body.residual()
+        values -= self.f_ext
+        b.setArray(values)
+        self._scale_of_bulk(x)
+        self.timers.add("bulk_assembly", time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        for c in self.contacts:
+            c.add_residual(b)
+            c.add_roundoff(self._scale)
+        self._scale.assemble()
+        self.timers.add("contact_assembly", time.perf_counter() - t0)
+        r = b.getArray()
+        self.internal = r + self.f_ext
+        rows = self.constrained_rows
+        r[rows] = 0.0
+        b.setArray(r)
+        scale = self._scale.getArray(readonly=True).copy()
+        scale[rows] = 0.0
+        self.floor = ROUNDOFF_FLOOR * np.sqrt(self.comm.allreduce(float(scale @ scale)))
+        return b.norm()
+
+    def _scale_of_bulk(self, x: PETSc.Vec) -> None:
+        """``|J_bulk| |x| + |f_ext|`` into the round-off scale (contacts add theirs); a
+        nonlinear body's ``J`` is the one of the last :meth:`jacobian`."""
+        if self._abs is None or self._abs_data is not self._bulk_data:
+            if self._bulk_data is None:
+                self._bulk_data = self._bulk_values()
+            if self._abs is None:
+                self._abs = self._base.create_matrix()
+            self._base.fill(self._abs, np.abs(self._bulk_data))
+            self._abs_data = self._bulk_data
+        ax = x.copy()
+        ax.abs()
+        self._abs.mult(ax, self._scale)
+        ax.destroy()
+        self._scale.setArray(self._scale.getArray() + np.abs(self.f_ext))
+
+    def _bulk_values(self) -> np.ndarray:
+        """Values of the bodies' Jacobians at their current ``u``, in the bulk pattern."""
+        base = np.zeros(self._base.nnz)
+        for k, body in enumerate(self.bodies):
+            base += (self._linear_data[k] if body.linear
+                     else self._base.gather_values(k, body.jacobian_values()))
+        return base
+
+    def matrix(self) -> PETSc.Mat:
+        """The Jacobian matrix for the current contact couplings (a new one when they
+        changed since the last call; collective).  It carries the block size and the
+        bodies' rigid-body modes as near null space (for algebraic multigrid)."""
+        versions = [c.couplings_version for c in self.contacts]
+        if self._J is None or versions != self._versions:
+            self._pattern = self._base.extended([c.couplings() for c in self.contacts])
+            if self._J is not None:
+                self._J.destroy()
+            self._J = self._pattern.create_matrix(self.gdim)
+            self._J.setNearNullSpace(self.rigid_body_modes())
+            for c in self.contacts:
+                c.register_matrix(self._J)
+            self._versions = versions
+            self._bc_slots = None
+        return self._J
+
+    def jacobian(self, x: PETSc.Vec, A: Optional[PETSc.Mat] = None) -> PETSc.Mat:
+        """Fill the Jacobian at ``x`` (the contacts at their last update) into ``A``
+        (default :meth:`matrix`); returns it."""
+        t0 = time.perf_counter()
+        A = self.matrix() if A is None else A
+        self.scatter(x)
+        if self._bulk_data is None or not self.linear:
+            self._bulk_data = self._bulk_values()
+        base = self._bulk_data
+        self.timers.add("bulk_assembly", time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        data = self._pattern.from_base(base)
+        for k, c in enumerate(self.contacts):
+            data += self._pattern.gather_values(k, c.coupling_values())
+        rows = self.constrained_rows
+        if self._bc_slots is None or not np.array_equal(self._bc_slots[0], rows):
+            self._bc_slots = (rows, self._pattern.row_slots(rows))
+        data[self._bc_slots[1]] = 0.0
+        data[self._pattern.diagonal_slots[rows]] = 1.0
+        # A force-controlled obstacle may have no stiffness along some axis (a frictionless
+        # plane in its own plane): a tiny spring in the Jacobian only keeps it regular; the
+        # residual, hence the solution, is unchanged.
+        data[self._pattern.diagonal_slots[self.free_obstacle_rows()]] += self._rigid_spring(base)
+        self._pattern.fill(A, data)
+        self.timers.add("contact_assembly", time.perf_counter() - t0)
+        return A
+
+    def _rigid_spring(self, base: np.ndarray) -> float:
+        """1e-12 of the largest bulk diagonal entry (found once)."""
+        if not self._spring and self.n_obstacles:
+            diagonal = np.abs(base[self._base.diagonal_slots])
+            self._spring = 1e-12 * self.comm.allreduce(float(diagonal.max(initial=0.0)),
+                                                       op=MPI.MAX)
+        return self._spring
+
+    def rigid_body_modes(self) -> PETSc.NullSpace:
+        """Translations and rotations of every body, orthonormal (collective): the near null
+        space of elasticity for algebraic multigrid.  An obstacle only translates."""
+        if self._modes is not None:
+            return self._modes
+        d = self.gdim
+        modes = [self.x.duplicate() for _ in range(3 if d == 2 else 6)]
+        values = np.zeros((len(modes), self.x.getLocalSize() // d, d))
+        for k, V in enumerate(self.spaces):
+            nodes = slice(int(self.layout.block_offsets[k]), int(self.layout.block_offsets[k + 1]))
+            X = V.tabulate_dof_coordinates()[: V.dofmap.index_map.size_local, :d]
+            values[:d, nodes] = np.eye(d)[:, None, :]
+            for j, (a, c) in enumerate([(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]):
+                values[d + j, nodes, a], values[d + j, nodes, c] = -X[:, c], X[:, a]
+        for k in range(self.n_obstacles):
+            values[:d, self.obstacle_rows(k)[:1] // d] = np.eye(d)[:, None, :]
+        for k, mode in enumerate(modes):  # modified Gram-Schmidt
+            mode.setArray(values[k].ravel())
+            for previous in modes[:k]:
+                mode.axpy(-mode.dot(previous), previous)
+            mode.scale(1.0 / mode.norm())
+        self._modes = PETSc.NullSpace().create(vectors=modes, comm=self.comm)
+        return self._modes
