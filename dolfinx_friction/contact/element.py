@@ -14,6 +14,10 @@ Two stages:
   clearance, relative displacement ``w`` and all their derivatives;
 * :func:`evaluate`: normal law, radial return, element forces and the tangent
   (``f_k = -phi_k F_p``, ``K_ki = -phi_k D_i - sum_a phi_k,a F_p (x) dxi^a/du_i``).
+
+Each public function runs the compiled kernel of :mod:`~dolfinx_friction.contact.kernels`
+or its numpy reference (``*_numpy``, batched over pairs), as
+:mod:`~dolfinx_friction.contact.backend` selects; both give the same results to round-off.
 """
 from __future__ import annotations
 
@@ -22,9 +26,10 @@ from typing import Optional
 
 import numpy as np
 
+from dolfinx_friction.contact import backend
 from dolfinx_friction.contact.friction import FrictionState, radial_return, tangent
 from dolfinx_friction.contact.laws import Law
-from dolfinx_friction.contact.projection import Projection, project
+from dolfinx_friction.contact.projection import Projection, project_numpy
 from dolfinx_friction.contact.shapes import Array, FaceType, surface_vector
 
 OPEN, STICK, SLIP = 0, 1, 2
@@ -74,10 +79,20 @@ def face_kinematics(face: FaceType, X_slave: Array, u_slave: Array, X_face: Arra
                     tangent: str = "consistent") -> Kinematics:
     """Kinematics of slave nodes against master faces (§3.2-§3.6, §5.2-§5.4).
 
-    ``X_slave, u_slave``: (n, d); ``X_face, u_face``: (n, nn, d).
+    ``X_slave, u_slave``: (n, d); ``X_face, u_face``: (n, nn, d); ``xi0`` (n, fdim): a
+    start for the projection (default: the face centroid).
     """
+    kernels = backend.compiled()
+    impl = face_kinematics_numpy if kernels is None else kernels.face_kinematics
+    return impl(face, X_slave, u_slave, X_face, u_face, xi0, tangent)
+
+
+def face_kinematics_numpy(face: FaceType, X_slave: Array, u_slave: Array, X_face: Array,
+                          u_face: Array, xi0: Array | None = None,
+                          tangent: str = "consistent") -> Kinematics:
+    """:func:`face_kinematics` in numpy (the reference)."""
     x_face = X_face + u_face
-    proj = project(face, X_slave + u_slave, x_face, xi0)
+    proj = project_numpy(face, X_slave + u_slave, x_face, xi0)
     xi = proj.xi
     n, nn, d = x_face.shape
     fdim = face.fdim
@@ -138,7 +153,20 @@ def rigid_kinematics(shape: str, X_slave: Array, u_slave: Array, U: Array, *,
 
     The element's master node is the obstacle's reference point, whose
     displacement is ``U``: ``w = u_p - U`` exactly, so options (a) and (b) agree.
+    ``shape``: "plane" (``point``, ``normal``), "sphere" (``center``, ``radius``; a circle
+    in 2D) or "cylinder" (``point``, ``axis``, ``radius``).
     """
+    kernels = backend.compiled()
+    impl = rigid_kinematics_numpy if kernels is None else kernels.rigid_kinematics
+    return impl(shape, X_slave, u_slave, U, point=point, normal=normal, center=center,
+                axis=axis, radius=radius)
+
+
+def rigid_kinematics_numpy(shape: str, X_slave: Array, u_slave: Array, U: Array, *,
+                           point: Array | None = None, normal: Array | None = None,
+                           center: Array | None = None, axis: Array | None = None,
+                           radius: float = 0.0) -> Kinematics:
+    """:func:`rigid_kinematics` in numpy (the reference)."""
     x = X_slave + u_slave
     n, d = x.shape
     eye = np.eye(d)
@@ -191,6 +219,15 @@ def evaluate(kin: Kinematics, area: Array, params: ContactParameters,
     ``gap_offset``: the initial-overclosure ramp shift of §3.4, added to ``g_N``
     before the law is evaluated.
     """
+    kernels = backend.compiled()
+    impl = evaluate_numpy if kernels is None else kernels.evaluate
+    return impl(kin, area, params, history, gap_offset)
+
+
+def evaluate_numpy(kin: Kinematics, area: Array, params: ContactParameters,
+                   history: Optional[FrictionState] = None, gap_offset: Array | float = 0.0
+                   ) -> ElementResult:
+    """:func:`evaluate` in numpy (the reference)."""
     n, d = kin.normal.shape
     nrm = kin.normal
     F_N, dF_N_dg = params.law.normal_force(kin.g_N + gap_offset, area)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dolfinx_friction.contact import backend
 from dolfinx_friction.contact.shapes import Array, FaceType
 
 EDGE_TOL = 1e-9  # parametric tolerance for "on the face"
@@ -52,7 +53,18 @@ def _newton_step(face: FaceType, x: Array, coords: Array, xi: Array):
 
 def project(face: FaceType, x: Array, coords: Array, xi0: Array | None = None,
             max_iter: int = 30, edge_tol: float = EDGE_TOL) -> Projection:
-    """Project points ``x`` (n, gdim) onto faces with node coordinates ``coords`` (n, nn, gdim)."""
+    """Project points ``x`` (n, gdim) onto faces with node coordinates ``coords`` (n, nn, gdim).
+
+    Runs the compiled kernel or :func:`project_numpy`, as :mod:`backend` selects.
+    """
+    kernels = backend.compiled()
+    impl = project_numpy if kernels is None else kernels.project
+    return impl(face, x, coords, xi0, max_iter, edge_tol)
+
+
+def project_numpy(face: FaceType, x: Array, coords: Array, xi0: Array | None = None,
+                  max_iter: int = 30, edge_tol: float = EDGE_TOL) -> Projection:
+    """:func:`project` in numpy, batched over points (the reference)."""
     n = len(x)
     xi = np.tile(face.centroid, (n, 1)) if xi0 is None else np.array(xi0, dtype=float)
     converged = np.zeros(n, dtype=bool)

@@ -1,0 +1,230 @@
+"""The compiled kernels (contact/kernels.py) against the numpy reference, to round-off.
+
+Every face type, rigid shape, law, state (open, frictionless, stick, slip) and
+tangent option: kinematics, forces, tangents, statuses and the trial history
+agree to 1e-12 relative (``max|a - b| / max|b|`` over the batch, per array);
+booleans and statuses exactly.  The worst values are printed at the end of the
+session.  The largest differences are in the clearance of open pairs (1e-4 on
+coordinates of size 1: the round-off of a coordinate difference, ~1e-16 / 1e-4).
+"""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+kernels = pytest.importorskip("dolfinx_friction.contact.kernels")
+
+from dolfinx_friction.contact import backend  # noqa: E402
+from dolfinx_friction.contact.element import (ContactParameters, evaluate,  # noqa: E402
+                                              evaluate_numpy, face_kinematics_numpy,
+                                              rigid_kinematics_numpy)
+from dolfinx_friction.contact.laws import Exponential, Linear, Tabular  # noqa: E402
+from dolfinx_friction.contact.projection import project_numpy  # noqa: E402
+from dolfinx_friction.contact.shapes import FACE_TYPES  # noqa: E402
+
+from .helpers import (FACES, LAW_NAMES, LAWS, RIGID_SHAPES, STATES, face_case,  # noqa: E402
+                      random_faces, random_interior_xi, record, rigid_case, rng_for,
+                      surface_point)
+
+TOL = 1e-12
+KIN_FIELDS = ("normal", "g_N", "dg_N", "dnormal", "phi", "dphi", "dxi", "w", "dw", "xi")
+RESULT_FIELDS = ("f", "K", "F_N", "F_T", "g_N")
+
+
+def rel(a, b) -> float:
+    """``max|a - b| / max|b|`` (0 for empty arrays; ``max|a|`` if ``b`` is zero)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    assert a.shape == b.shape
+    if b.size == 0:
+        return 0.0
+    scale = np.abs(b).max()
+    return float(np.abs(a - b).max() / (scale if scale > 0 else 1.0))
+
+
+def assert_kinematics_equal(new, ref, key: str):
+    for name in KIN_FIELDS:
+        err = record(f"kernels: kinematics {name} [{key}]", rel(getattr(new, name),
+                                                                getattr(ref, name)))
+        assert err <= TOL, (name, err)
+    if ref.projection is not None:
+        for flag in ("converged", "interior"):
+            assert np.array_equal(getattr(new.projection, flag), getattr(ref.projection, flag))
+
+
+def assert_results_equal(new, ref, key: str):
+    for name in RESULT_FIELDS:
+        err = record(f"kernels: {name} [{key}]", rel(getattr(new, name), getattr(ref, name)))
+        assert err <= TOL, (name, err)
+    assert new.status.dtype == ref.status.dtype
+    assert np.array_equal(new.status, ref.status)
+    assert (new.trial is None) == (ref.trial is None)
+    if ref.trial is not None:
+        for name in ("w", "g_T", "g_p"):
+            err = record(f"kernels: trial {name} [{key}]",
+                         rel(getattr(new.trial, name), getattr(ref.trial, name)))
+            assert err <= TOL, (name, err)
+
+
+def face_pair(case, tangent):
+    u = case.u_e()
+    args = (case.face, case.X_slave, u[:, -1], case.X_master, u[:, :-1])
+    return (kernels.face_kinematics(*args, tangent=tangent),
+            face_kinematics_numpy(*args, tangent=tangent))
+
+
+@pytest.mark.parametrize("tangent", ["consistent", "calculix"])
+@pytest.mark.parametrize("state", STATES)
+@pytest.mark.parametrize("law", LAW_NAMES)
+@pytest.mark.parametrize("name", FACES)
+def test_face_elements_equal_numpy(name, law, state, tangent):
+    case = face_case(name, law, state, n=24, tangent=tangent)
+    new, ref = face_pair(case, tangent)
+    key = f"{name}"
+    assert_kinematics_equal(new, ref, key)
+    expected = evaluate_numpy(ref, case.area, case.params, case.history)
+    assert_results_equal(kernels.evaluate(new, case.area, case.params, case.history),
+                         expected, key)
+    # the compiled evaluation of numpy kinematics too (callers may mix them)
+    assert_results_equal(kernels.evaluate(ref, case.area, case.params, case.history),
+                         expected, key)
+    if state in ("stick", "slip"):
+        assert np.all(expected.status == (1 if state == "stick" else 2))
+
+
+@pytest.mark.parametrize("state", STATES)
+@pytest.mark.parametrize("law", LAW_NAMES)
+@pytest.mark.parametrize("shape", RIGID_SHAPES)
+def test_rigid_elements_equal_numpy(shape, law, state):
+    case = rigid_case(shape, law, state, n=24)
+    u = case.u_e()
+    geometry = {k: v for k, v in case.rigid.items() if k != "shape"}
+    args = (case.rigid["shape"], case.X_slave, u[:, -1], u[:, 0])
+    new = kernels.rigid_kinematics(*args, **geometry)
+    ref = rigid_kinematics_numpy(*args, **geometry)
+    assert_kinematics_equal(new, ref, "rigid")
+    # U as one translation (d,), as interaction.py passes it
+    one = kernels.rigid_kinematics(*args[:3], u[0, 0], **geometry)
+    assert_kinematics_equal(one, rigid_kinematics_numpy(*args[:3], u[0, 0], **geometry), "rigid")
+    assert_results_equal(kernels.evaluate(new, case.area, case.params, case.history),
+                         evaluate_numpy(ref, case.area, case.params, case.history), "rigid")
+
+
+@pytest.mark.parametrize("name", FACES)
+def test_mixed_batch_with_gap_offset(name):
+    """Open, stick and slip pairs in one batch, a per-pair overclosure ramp shift."""
+    rng = rng_for("mixed", name)
+    n = 30
+    g = np.where(np.arange(n) % 3 == 0, 2e-4, -rng.uniform(0.004, 0.02, n))
+    ratio = np.where(np.arange(n) % 2 == 0, 0.5, 2.0)
+    case = face_case(name, "linear", "slip", n=n, g_N=g, ratio=ratio)
+    new, ref = face_pair(case, "consistent")
+    offset = rng.uniform(-1e-3, 1e-3, n)
+    for shift in (offset, 5e-4):
+        expected = evaluate_numpy(ref, case.area, case.params, case.history, gap_offset=shift)
+        assert len(set(expected.status.tolist())) == 3
+        assert_results_equal(kernels.evaluate(new, case.area, case.params, case.history,
+                                              gap_offset=shift), expected, "mixed")
+
+
+@pytest.mark.parametrize("name", FACES)
+def test_projection_equal_numpy(name):
+    """Cold and warm starts, points beyond the edges, and too few iterations."""
+    face = FACE_TYPES[name]
+    rng = rng_for("kernel projection", name)
+    n = 40
+    x_face = random_faces(face, n, rng)
+    xi = random_interior_xi(face, n, rng, margin=-0.4)  # some beyond the edges
+    q, nrm, _ = surface_point(face, x_face, xi)
+    x = q + rng.uniform(-0.05, 0.05, n)[:, None] * nrm
+    starts = (None, xi + 0.05 * rng.uniform(-1, 1, xi.shape))
+    for xi0 in starts:
+        for max_iter in (30, 1):
+            new = kernels.project(face, x, x_face, xi0, max_iter=max_iter)
+            ref = project_numpy(face, x, x_face, xi0, max_iter=max_iter)
+            err = record(f"kernels: projection xi [{name}]", rel(new.xi, ref.xi))
+            assert err <= TOL
+            assert np.array_equal(new.converged, ref.converged)
+            assert np.array_equal(new.interior, ref.interior)
+    assert not ref.converged.any()  # one iteration: not yet converged
+    full = project_numpy(face, x, x_face)
+    assert full.converged.all() and not full.interior.all()
+    if xi0 is not None:
+        assert np.array_equal(xi0, starts[1])  # the start is not modified
+
+
+def test_empty_batches():
+    case = face_case("Q4", "linear", "slip", n=3)
+    empty = slice(0, 0)
+    u = case.u_e()[empty]
+    kin = kernels.face_kinematics(case.face, case.X_slave[empty], u[:, -1],
+                                  case.X_master[empty], u[:, :-1])
+    res = kernels.evaluate(kin, case.area[empty], case.params, case.history.take(empty))
+    assert res.K.shape == (0, 5, 3, 5, 3) and res.trial.g_p.shape == (0, 3)
+
+
+@dataclass(frozen=True)
+class _SoftLinear(Linear):
+    """A law the kernels do not know: its own (numpy) normal_force is used."""
+
+    def normal_force(self, g_N, area):
+        F, dF = super().normal_force(g_N, area)
+        return 0.5 * F, 0.5 * dF
+
+
+def test_unknown_law_uses_its_own_method():
+    case = face_case("T6", "linear", "slip", n=10)
+    params = ContactParameters(_SoftLinear(K=1e4, sigma_inf=3.0), case.params.mu,
+                               case.params.stick_slope)
+    new, ref = face_pair(case, "consistent")
+    assert_results_equal(kernels.evaluate(new, case.area, params, case.history),
+                         evaluate_numpy(ref, case.area, params, case.history), "law subclass")
+
+
+@pytest.mark.parametrize("law", [*LAWS.values(), Exponential(c0=0.05, p0=0.0),
+                                 Tabular(pressures=(1.0, 3.0), overclosures=(0.0, 0.0))])
+def test_normal_force_equal_numpy(law):
+    """Across the table's breakpoints and ends, the exponential cap, zero areas."""
+    d = np.concatenate([np.linspace(-0.01, 0.5, 2001), [0.0, -0.002, 0.006, 0.03]])
+    area = np.concatenate([np.full(len(d) - 3, 0.3), [0.0, 0.0, 1e3]])
+    F, dF = kernels.normal_force(law, -d, area)
+    F_ref, dF_ref = law.normal_force(-d, area)
+    assert rel(F, F_ref) <= TOL and rel(dF, dF_ref) <= TOL
+
+
+def test_switch_selects_the_implementation(monkeypatch):
+    case = face_case("Q4", "linear", "slip", n=4)
+    calls = []
+    monkeypatch.setattr(kernels, "evaluate", lambda *a, **k: calls.append("numba"))
+    kin = case.kinematics()
+    with backend.use("numpy"):
+        assert backend.active() == "numpy"
+        evaluate(kin, case.area, case.params, case.history)
+    assert calls == []
+    with backend.use("numba"):
+        assert backend.active() == "numba"
+        evaluate(kin, case.area, case.params, case.history)
+    assert calls == ["numba"]
+    with pytest.raises(ValueError):
+        backend.use("fortran")
+
+
+@pytest.mark.parametrize("choice", ["numpy", "numba"])
+def test_environment_variable(choice):
+    code = "from dolfinx_friction.contact import backend; print(backend.active())"
+    env = dict(os.environ, **{backend.ENV: choice})
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, check=True)
+    assert out.stdout.strip() == choice
+
+
+def test_jit_without_a_cache_directory():
+    """A function numba cannot cache (no source file: no cache locator) still compiles."""
+    namespace = {}
+    exec(compile("def twice(x):\n    return 2.0 * x\n", "<no file>", "exec"), namespace)
+    twice = kernels._jit(namespace["twice"])
+    assert twice(1.5) == 3.0
