@@ -240,7 +240,7 @@ def write_results(text: str) -> None:
         new = old.rstrip("\n") + "\n\n" + text
     else:
         end = old.find("\n## ", start + len(HEADING))
-        new = old[:start] + text + ("" if end < 0 else old[end + 1:])
+        new = old[:start] + text.rstrip("\n") + ("\n" if end < 0 else "\n\n" + old[end + 1:])
     RESULTS.write_text(new.rstrip("\n") + "\n")
 
 
