@@ -5,6 +5,7 @@ import argparse
 import logging
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import Optional, Sequence
 
@@ -98,13 +99,18 @@ def _rank() -> int:
 
 
 def _quiet_libraries(debug: bool) -> None:
-    """Library log records reach stderr from WARNING up (INFO too with --debug).
+    """Library log records reach stderr from WARNING up (INFO too with --debug); numpy's
+    floating-point RuntimeWarnings only with --debug.
 
     The handler is installed before dolfinx is imported, so that FFCx's
     ``logging.basicConfig()`` adds none of its own; the level is on the handler, as
     the JIT compiler (distutils) lowers the root logger's level to INFO while it
     builds a form, which would fill stderr with compiler command lines.
     """
+    if not debug:  # numpy's floating-point chatter: the failure it means is reported
+        warnings.filterwarnings("ignore", category=RuntimeWarning,
+                                message=r"(overflow|invalid value|divide by zero|underflow) "
+                                        r"encountered")
     root = logging.getLogger()
     if root.handlers:  # configured by an embedding program: leave it alone
         return

@@ -118,6 +118,19 @@ class BodyMesh:
         tags.name = f"{self.name}:" + ",".join(names)
         return tags, values
 
+    def interior_facets(self, name: str) -> int:
+        """How many facets of the facet group ``name`` are interior to this body (two
+        cells), summed over the ranks.  Collective."""
+        topology = self.mesh.topology
+        fdim = topology.dim - 1
+        topology.create_entities(fdim)
+        topology.create_connectivity(fdim, topology.dim)
+        exterior = dolfinx.mesh.exterior_facet_indices(topology)
+        dim, idx = self.groups[name]
+        owned = idx[idx < topology.index_map(dim).size_local]
+        inside = int(np.count_nonzero(~np.isin(owned, exterior)))
+        return self.mesh.comm.allreduce(inside, op=MPI.SUM)
+
 
 @dataclass
 class MeshSet:
@@ -134,6 +147,8 @@ class MeshSet:
     bodies: dict[str, BodyMesh]
     group_dims: dict[str, int]
     group_bodies: dict[str, tuple[str, ...]]
+    #: every named group -> the bodies that hold at least one of its nodes
+    group_touches: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
 
 # --------------------------------------------------------------------------
@@ -170,6 +185,7 @@ class _Plan:
     bodies: list[_BodyPlan]
     group_dims: dict[str, int]
     group_bodies: dict[str, tuple[str, ...]]
+    group_touches: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
 
 def _type_name(gmsh, etype: int) -> str:
@@ -281,21 +297,27 @@ def _extract(gmsh, body_names: Sequence[str], where: str) -> _Plan:
         nodes = np.unique(cells)
         rows = node_rows(nodes, f"body '{b}'")
         body_nodes[b] = nodes
-        bodies.append(_BodyPlan(b, etype, len(cells), np.searchsorted(nodes, cells),
-                                coords[rows, :gdim].copy()))
+        plan = _BodyPlan(b, etype, len(cells), np.searchsorted(nodes, cells),
+                         coords[rows, :gdim].copy())
+        _check_cells(plan, nodes, where)
+        bodies.append(plan)
 
     # Other groups: give each to every body containing all of its nodes
     group_bodies: dict[str, tuple[str, ...]] = {}
+    group_touches: dict[str, tuple[str, ...]] = {}
     for name, (dim, _) in named.items():
         if name in body_names:
-            group_bodies[name] = (name,)
+            group_bodies[name] = group_touches[name] = (name,)
             continue
         elems = elements[name]
         gnodes = np.unique(np.concatenate([a.ravel() for a in elems.values()]))
-        owners = []
+        owners, touched = [], []
         for bp in bodies:
             nodes = body_nodes[bp.name]
-            if not np.all(np.isin(gnodes, nodes, assume_unique=True)):
+            inside = np.isin(gnodes, nodes, assume_unique=True)
+            if np.any(inside):
+                touched.append(bp.name)
+            if not np.all(inside):
                 continue
             expected = bp.gmsh_type if dim == tdim else _SUB_TYPES[bp.gmsh_type][dim]
             for etype, ents in elems.items():
@@ -309,8 +331,55 @@ def _extract(gmsh, body_names: Sequence[str], where: str) -> _Plan:
                                             np.searchsorted(nodes, ents)))
             owners.append(bp.name)
         group_bodies[name] = tuple(owners)
+        group_touches[name] = tuple(touched)
 
-    return _Plan(gdim, bodies, {n: d for n, (d, _) in named.items()}, group_bodies)
+    return _Plan(gdim, bodies, {n: d for n, (d, _) in named.items()}, group_bodies,
+                 group_touches)
+
+
+# Corner -> its neighbours along the reference axes (Gmsh node order), so that the
+# corner's Jacobian determinant is positive for a positively oriented cell.
+_CORNERS: dict[str, tuple[tuple[int, ...], ...]] = {
+    "triangle": ((0, 1, 2),),
+    "tetrahedron": ((0, 1, 2, 3),),
+    "quadrilateral": ((0, 1, 3), (1, 2, 0), (2, 3, 1), (3, 0, 2)),
+    "hexahedron": ((0, 1, 3, 4), (1, 2, 0, 5), (2, 3, 1, 6), (3, 0, 2, 7),
+                   (4, 7, 5, 0), (5, 4, 6, 1), (6, 5, 7, 2), (7, 6, 4, 3)),
+}
+
+
+def corner_jacobians(cells: np.ndarray, x: np.ndarray, shape: str) -> np.ndarray:
+    """(n_cells, n_corners) Jacobian determinants of the straight-sided cells at their corners."""
+    dets = []
+    for corner, *axes in _CORNERS[shape]:
+        edges = np.stack([x[cells[:, a]] - x[cells[:, corner]] for a in axes], axis=-1)
+        dets.append(np.linalg.det(edges))
+    return np.stack(dets, axis=1)
+
+
+def _check_cells(plan: _BodyPlan, node_tags: np.ndarray, where: str) -> None:
+    """Refuse non-finite node coordinates and cells of zero or negative measure.
+
+    A cell is degenerate when a corner Jacobian is zero (relative to its size) or of
+    the other sign than at its other corners (a tangled cell).  Cells numbered the
+    other way round (all corners negative) are fine.
+    """
+    x, cells = plan.x, plan.cells
+    bad = ~np.all(np.isfinite(x), axis=1)
+    if np.any(bad):
+        raise MeshError(f"{where}: body '{plan.name}' has non-finite node coordinates "
+                        f"(node {int(node_tags[np.argmax(bad)])}: {x[np.argmax(bad)].tolist()})")
+    shape = _BODY_TYPES[plan.gmsh_type][0]
+    with np.errstate(all="ignore"):
+        dets = corner_jacobians(cells, x, shape)
+        size = np.ptp(x[cells], axis=1).max(axis=1) ** x.shape[1]
+        sign = np.where(dets.sum(axis=1) < 0, -1.0, 1.0)[:, None]
+        bad = np.any(sign * dets <= 1e-12 * size[:, None], axis=1)
+    if np.any(bad):
+        cell = int(np.argmax(bad))
+        raise MeshError(f"{where}: body '{plan.name}' has {int(np.sum(bad))} cell(s) of zero "
+                        f"or negative measure (the first: cell {cell} of the body, nodes "
+                        f"{node_tags[cells[cell]].tolist()})")
 
 
 def _gmsh_initialized(gmsh) -> bool:
@@ -547,7 +616,8 @@ def load_mesh(source: Union[str, Path, Any], body_names: Sequence[str],
             comm.bcast((message, None), root=0)
             raise
         meta = None if plan is None else _Plan(plan.gdim, [b.strip() for b in plan.bodies],
-                                               plan.group_dims, plan.group_bodies)
+                                               plan.group_dims, plan.group_bodies,
+                                               plan.group_touches)
         comm.bcast((message, meta), root=0)
     else:
         message, plan = comm.bcast(None, root=0)
@@ -560,4 +630,5 @@ def load_mesh(source: Union[str, Path, Any], body_names: Sequence[str],
 
     bodies = {bp.name: _build_body(comm, bp, plan.gdim, root) for bp in plan.bodies}
     # every group of a body is listed on every rank (possibly empty)
-    return MeshSet(plan.gdim, bodies, dict(plan.group_dims), dict(plan.group_bodies))
+    return MeshSet(plan.gdim, bodies, dict(plan.group_dims), dict(plan.group_bodies),
+                   dict(plan.group_touches))

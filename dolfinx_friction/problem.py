@@ -77,6 +77,10 @@ class ContactProblem:
     def _check_groups(self) -> None:
         s, dims = self.scene, self.meshes.group_dims
         fdim = self.gdim - 1
+        for i, r in enumerate(s.rigids):
+            if r.name in dims:
+                raise ModelError(f"rigid.{i}.name: {r.name!r} is also a physical group of the "
+                                 "mesh: ambiguous as a contact master (rename the obstacle)")
         for k, c in enumerate(s.contacts):
             if c.slave not in dims:
                 raise ModelError(f"contact.{k}.slave: no physical group {c.slave!r} in the mesh")
@@ -92,9 +96,23 @@ class ContactProblem:
                                      f"{dims[c.master]}, contact surfaces need {fdim}")
             for role in ("slave", "master"):
                 g = getattr(c, role)
-                if g in dims and len(self.meshes.group_bodies.get(g, ())) != 1:
-                    raise ModelError(f"contact.{k}.{role}: group {g!r} must lie on exactly one "
-                                     f"body, found {list(self.meshes.group_bodies.get(g, ()))}")
+                if g not in dims:
+                    continue
+                owners = self.meshes.group_bodies.get(g, ())
+                if len(owners) != 1:
+                    touched = self.meshes.group_touches.get(g, ())
+                    raise ModelError(
+                        f"contact.{k}.{role}: group {g!r} " + (
+                            f"lies on {len(owners)} bodies at once ({', '.join(owners)}: "
+                            "their meshes share its nodes)" if owners else
+                            f"spans the bodies {', '.join(touched)}" if len(touched) > 1 else
+                            "lies on none of the bodies") +
+                        "; a contact surface must lie on exactly one body")
+                inside = self.meshes.bodies[owners[0]].interior_facets(g)
+                if inside:
+                    raise ModelError(f"contact.{k}.{role}: group {g!r} has {inside} facet(s) "
+                                     f"inside body {owners[0]!r}; a contact surface must be on "
+                                     "the body's boundary")
         for i, step in enumerate(s.steps):
             for j, bc in enumerate(step.bcs):
                 self._check_node_group(bc.on, f"step.{i}.bc.{j}.on")

@@ -124,7 +124,10 @@ def _number(**bounds: float) -> Check:
     def check(value: Any, key: str) -> float:
         if not _is_number(value):
             _fail(key, "must be a number", value)
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:  # an integer beyond the float range
+            x = math.inf
         if not math.isfinite(x):
             _fail(key, "must be finite", value)
         for name, holds, symbol in _BOUNDS:
@@ -135,15 +138,28 @@ def _number(**bounds: float) -> Check:
     return check
 
 
-def _integer(minimum: int) -> Check:
+def _integer(minimum: int, maximum: int, why: str = "") -> Check:
+    """An int within ``[minimum, maximum]``; ``why`` explains the maximum."""
+
     def check(value: Any, key: str) -> int:
         if not isinstance(value, int) or isinstance(value, bool):
             _fail(key, "must be an integer", value)
         if value < minimum:
             _fail(key, f"must be >= {minimum}", value)
+        if value > maximum:
+            _fail(key, f"must be <= {maximum}" + (f" ({why})" if why else ""), value)
         return value
 
     return check
+
+
+def _modulus(value: Any, key: str) -> float:
+    """Young's modulus: > 0, and small enough that the penalty 50 E is a finite number."""
+    E = _number(gt=0)(value, key)
+    if not math.isfinite(50.0 * E):
+        _fail(key, "is so large that the penalty K = 50 E (CalculiX's default) overflows",
+              value)
+    return E
 
 
 def _one_of(*options: Any) -> Check:
@@ -191,6 +207,7 @@ def _msh_file(value: Any, key: str) -> str:
 
 
 _ANY_NUMBER = _number()
+_PRESSURE = _number(ge=0)
 
 
 def _list_of_2_or_3(value: Any, key: str, what: str) -> list:
@@ -238,12 +255,15 @@ def _pressure_table(value: Any, key: str) -> tuple[tuple[float, float], ...]:
         where = _join(key, i)
         if not isinstance(pair, list) or len(pair) != 2:
             _fail(where, "must be a [pressure, overclosure] pair", pair)
-        pairs.append((_ANY_NUMBER(pair[0], _join(where, 0)), _ANY_NUMBER(pair[1], _join(where, 1))))
+        pairs.append((_PRESSURE(pair[0], _join(where, 0)), _ANY_NUMBER(pair[1], _join(where, 1))))
     for i in range(1, len(pairs)):
         previous = pairs[i - 1][1]
         if pairs[i][1] < previous:
             _fail(f"{key}.{i}.1", f"overclosure must not decrease (previous: {previous:g})",
                   value[i][1])
+        if pairs[i][0] <= pairs[i - 1][0]:
+            _fail(f"{key}.{i}.0", "pressure must increase with the overclosure "
+                  f"(previous: {pairs[i - 1][0]:g})", value[i][0])
     return tuple(pairs)
 
 
@@ -368,7 +388,7 @@ _CONTACT = _record(ContactPair, {
     "mu": _Key(_number(ge=0)),
     "stick_slope": _Key(_number(gt=0)),
     "tangent": _Key(_one_of(*TANGENTS)),
-    "pairing_iterations": _Key(_integer(1)),
+    "pairing_iterations": _Key(_integer(1, 10_000)),
 }, _check_law, _check_not_self_contact)
 
 # ---- [[step]]
@@ -387,11 +407,12 @@ _MOTION = _record(RigidMotion, {
 
 _STEP_KEYS = {
     "name": _Key(_name),
-    "increments": _Key(_integer(1)),
-    "max_cutbacks": _Key(_integer(0)),
+    "increments": _Key(_integer(1, 1_000_000)),
+    "max_cutbacks": _Key(_integer(0, 50, "an increment halved more often is below the "
+                                        "resolution of the pseudo-time")),
     "newton_rtol": _Key(_number(gt=0)),
     "newton_atol": _Key(_number(gt=0)),
-    "max_iterations": _Key(_integer(1)),
+    "max_iterations": _Key(_integer(1, 10_000)),
     "line_search": _Key(_bool),
     "bc": _Key(_array(_BC), field="bcs"),
     "load": _Key(_array(_LOAD), field="loads"),
@@ -424,7 +445,7 @@ def _step(table: Any, key: str) -> Step:
 
 _BODY = _record(Body, {
     "name": _Key(_name, required=True),
-    "E": _Key(_number(gt=0), required=True),
+    "E": _Key(_modulus, required=True),
     "nu": _Key(_number(gt=-1, lt=0.5), required=True),
     "degree": _Key(_one_of(1, 2)),
     "plane": _Key(_one_of("strain", "stress")),
@@ -533,6 +554,22 @@ def _check_scene(scene: Scene) -> None:
     _check_dimension(scene)
 
 
+#: How deeply arrays and tables may nest (a scene needs 5 levels).
+MAX_DEPTH = 32
+
+
+def _check_depth(data: Mapping[str, Any]) -> None:
+    """Refuse values nested more than MAX_DEPTH levels (before anything recurses into them)."""
+    stack: list[tuple[Any, str, int]] = [(data, "", 0)]
+    while stack:
+        node, key, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            _fail(".".join(key.split(".")[:4]) + "...", f"nested more than {MAX_DEPTH} levels deep")
+        items = (node.items() if isinstance(node, Mapping) else
+                 enumerate(node) if isinstance(node, (list, tuple)) else ())
+        stack.extend((v, _join(key, k), depth + 1) for k, v in items)
+
+
 def _resolve(base: Optional[Path], name: str) -> Path:
     return (base / name).resolve() if base is not None else Path(name)
 
@@ -547,6 +584,7 @@ def parse_scene(data: Mapping[str, Any], source: Optional[PathLike] = None) -> S
     try:
         if not isinstance(data, Mapping):
             raise SceneError("a scene must be a table of keys")
+        _check_depth(data)
         fields = _read(data, "", _SCENE_KEYS)
     except SceneError as error:
         raise (error.with_source(source) if source is not None else error) from None
@@ -570,7 +608,7 @@ def parse_value(text: str) -> Any:
     """``VALUE`` of ``--set KEY=VALUE``: a TOML value if it parses as one, else the bare string."""
     try:
         document = tomllib.loads(f"value = {text}")
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError):
         return text
     return document["value"] if list(document) == ["value"] else text
 
@@ -638,15 +676,23 @@ def apply_override(data: dict, assignment: str) -> None:
 # --------------------------------------------------------------------------- files
 
 
+_BOM = b"\xef\xbb\xbf"
+
+
 def _read_toml(path: Path, label: str) -> dict:
+    """The TOML document of ``path`` (a UTF-8 byte-order mark is skipped)."""
     try:
         with open(path, "rb") as stream:
-            return tomllib.load(stream)
+            data = stream.read()
+        return tomllib.loads(data.removeprefix(_BOM).decode("utf-8"))
     except OSError as error:
         reason = error.strerror or str(error)
         raise SceneError(f"cannot read the scene: {reason}", source=label) from None
     except UnicodeDecodeError as error:
         raise SceneError(f"not UTF-8 text ({error.reason})", source=label) from None
+    except RecursionError:
+        raise SceneError(f"TOML nested too deeply to read (at most {MAX_DEPTH} levels of "
+                         "arrays and tables)", source=label) from None
     except tomllib.TOMLDecodeError as error:
         message = str(error)
         match = re.search(r"\(at line (\d+), column (\d+)\)$", message)

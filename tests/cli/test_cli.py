@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Optional
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 
@@ -258,6 +259,56 @@ def _without_names(path: Path) -> Path:
     return meshes._write(build, path)
 
 
+def _spanning_group(path: Path) -> Path:
+    """tests.meshes.two_boxes (coarse) plus ``both_bottoms``: a facet group on both bodies."""
+    def build():
+        f = meshes._box(0, 0, 0, 1, 1, 0.5)
+        b = meshes._box(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
+        meshes._mesh_boxes([(f, (2, 2, 1)), (b, (1, 1, 1))])
+        meshes._group(3, [f], "foundation")
+        meshes._group(3, [b], "block")
+        meshes._group(2, meshes._boundary(3, f, 2, 0.0), "foundation_bottom")
+        meshes._group(2, meshes._boundary(3, f, 2, 0.5), "foundation_top")
+        meshes._group(2, meshes._boundary(3, b, 2, 0.5), "block_bottom")
+        meshes._group(2, meshes._boundary(3, b, 2, 0.75), "block_top")
+        meshes._group(2, meshes._boundary(3, b, 2, 0.5) + meshes._boundary(3, f, 2, 0.0),
+                      "both_bottoms")
+    return meshes._write(build, path)
+
+
+def _split_block(path: Path) -> Path:
+    """One body ``block`` of two stacked unit hexahedra; ``middle`` is the face between them
+    (interior to the body), ``bottom`` and ``top`` its outer faces."""
+    import gmsh
+
+    def build():
+        a = meshes._box(0, 0, 0, 1, 1, 0.5)
+        b = meshes._box(0, 0, 0.5, 1, 1, 0.5)
+        gmsh.model.occ.fragment([(3, a)], [(3, b)])
+        gmsh.model.occ.synchronize()
+        meshes._mesh_boxes([(a, (1, 1, 1)), (b, (1, 1, 1))])
+        meshes._group(3, [a, b], "block")
+        meshes._group(2, meshes._boundary(3, a, 2, 0.0), "bottom")
+        meshes._group(2, meshes._boundary(3, a, 2, 0.5), "middle")
+        meshes._group(2, meshes._boundary(3, b, 2, 1.0), "top")
+    return meshes._write(build, path)
+
+
+def _moved_node(source: Path, path: Path, where: tuple, to: tuple) -> None:
+    """``source`` with its node at ``where`` moved to ``to`` (NaN allowed)."""
+    import gmsh
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    try:
+        gmsh.merge(str(source))
+        tags, x, _ = gmsh.model.mesh.getNodes()
+        k = int(np.argmin(np.linalg.norm(np.reshape(x, (-1, 3)) - where, axis=1)))
+        gmsh.model.mesh.setNode(int(tags[k]), list(to), [])
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+
+
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory) -> Path:
     """Meshes and base scenes, made once for the module."""
@@ -277,6 +328,13 @@ def workdir(tmp_path_factory) -> Path:
         (d / f"{name}.toml").write_text(written)
     (d / "a_file").write_text("not a directory\n")
     _hostile_inputs(d, text)
+    _spanning_group(d / "spanning.msh")
+    _split_block(d / "split.msh")
+    rect = d / "rect.msh"
+    _moved_node(rect, d / "rect_nan.msh", (0.5, 0.25, 0), (math.nan, 0.25, 0))
+    _moved_node(rect, d / "rect_flat.msh", (0, 0.25, 0), (0, 0, 0))  # a cell of zero area
+    _moved_node(rect, d / "rect_tangled.msh", (0.25, 0.25, 0), (0.25, -0.2, 0))
+    (d / "bom.toml").write_bytes(b"\xef\xbb\xbf" + (d / "good.toml").read_bytes())
     return d
 
 
@@ -459,6 +517,56 @@ CASES = [
     Case("mesh_declares_huge_node_count", ["huge.msh", "1000000000000 nodes"],
          [("mesh.file", "huge.msh")]),
     Case("scene_is_a_fifo", ["fifo.toml", "FIFO"], scene="{d}/fifo.toml"),
+    Case("mesh_nan_coordinate", ["rect_nan.msh", "body 'block'", "non-finite"],
+         [("mesh.file", "rect_nan.msh")], base="planar"),
+    Case("mesh_zero_area_cell", ["rect_flat.msh", "body 'block'", "zero or negative measure"],
+         [("mesh.file", "rect_flat.msh")], base="planar"),
+    Case("mesh_tangled_cell", ["rect_tangled.msh", "body 'block'", "zero or negative measure"],
+         [("mesh.file", "rect_tangled.msh")], base="planar", command="run",
+         args=["--out", "{d}/never"]),
+    # numbers that overflow or are not finite, nesting, tabular laws
+    Case("set_E_inf", ["body.0.E = inf", "finite"], args=["--set", "body.0.E=inf"]),
+    Case("set_u_nan", ["step.0.bc.1.u.2 = nan", "finite"], args=["--set", "step.0.bc.1.u.2=nan"]),
+    Case("set_mu_1e400", ["contact.0.mu = inf", "finite"], args=["--set", "contact.0.mu=1e400"]),
+    Case("increments_1e400", ["step.1.increments = inf", "integer"], command="run",
+         text=toml_dumps(GOOD).replace("increments = 3", "increments = 1e400"),
+         args=["--out", "{d}/never"]),
+    Case("increments_huge_integer", ["step.1.increments", "<= 1000000"], command="run",
+         args=["--set", "step.1.increments=1" + "0" * 400, "--out", "{d}/never"]),
+    Case("E_huge_integer", ["body.0.E", "finite"], args=["--set", "body.0.E=1" + "0" * 400]),
+    Case("E_overflows_default_K", ["body.1.E = 1e+307", "K = 50 E", "overflows"], command="run",
+         args=["--set", "body.1.E=1e307", "--out", "{d}/never"]),
+    Case("radius_1e400", ["rigid.0.radius = inf", "finite"],
+         text=toml_dumps(PLANAR).replace("radius = 0.5", "radius = 1e400")),
+    Case("toml_nested_1000_arrays", ["case_toml_nested_1000_arrays.toml", "nested too deeply"],
+         text=toml_dumps(GOOD) + "\nx = " + "[" * 1000 + "]" * 1000 + "\n"),
+    Case("toml_nested_600_tables", ["nested too deeply"],
+         text="x = " + "{a = " * 600 + "1" + "}" * 600 + "\n" + toml_dumps(GOOD)),
+    Case("toml_nested_100_arrays", ["output.x.0.0", "nested more than"],
+         text=toml_dumps(GOOD) + "\nx = " + "[" * 100 + "]" * 100 + "\n"),
+    Case("tabular_negative_pressure", ["contact.0.table.0.0 = -1.0", ">= 0"],
+         [("contact.0.law", "tabular"), ("contact.0.table", [[-1.0, 0.0], [10.0, 0.01]])]),
+    Case("tabular_decreasing_pressure", ["contact.0.table.2.0 = 5.0", "increase"],
+         [("contact.0.law", "tabular"),
+          ("contact.0.table", [[0.0, 0.0], [10.0, 0.01], [5.0, 0.02]])]),
+    # names that mean two things, groups that are no contact surface
+    Case("rigid_named_like_facet_group", ["rigid.0.name", "'side_x0'", "ambiguous"],
+         [("rigid.0.name", "side_x0"), ("contact.0.master", "side_x0"),
+          ("step.0.rigid.0.name", "side_x0")], base="rigid"),
+    Case("rigid_named_like_body", ["rigid.0.name", "'block'", "ambiguous"],
+         [("rigid.0.name", "block"), ("contact.0.master", "block"),
+          ("step.0.rigid.0.name", "block")], base="rigid"),
+    Case("slave_spans_two_bodies", ["contact.0.slave", "both_bottoms", "spans the bodies block, "
+                                    "foundation"],
+         [("mesh.file", "spanning.msh"), ("contact.0.slave", "both_bottoms")]),
+    Case("master_spans_two_bodies", ["contact.0.master", "both_bottoms", "spans"],
+         [("mesh.file", "spanning.msh"), ("contact.0.master", "both_bottoms")], command="run",
+         args=["--out", "{d}/never"]),
+    Case("interior_slave", ["contact.0.slave", "'middle'", "inside body 'block'"],
+         [("mesh.file", "split.msh"), ("contact.0.slave", "middle")], base="rigid"),
+    Case("interior_master", ["contact.0.master", "'middle'", "inside body 'block'"],
+         [("mesh.file", "split.msh"), ("rigid", []), ("step.0.rigid", []),
+          ("contact.0.slave", "top"), ("contact.0.master", "middle")], base="rigid"),
     Case("mesh_with_empty_group", ["empty_group", "empty"],
          [("mesh.file", "empty_group.msh"), ("body", [{"name": "block", "E": 1.0, "nu": 0.3}]),
           ("contact", []), ("step", [{"bc": [{"on": "bottom", "u": [0.0, 0.0, 0.0]}]}])]),
@@ -507,6 +615,12 @@ def test_mesh_files_run_no_code(workdir):
     good = cli("check", workdir / "good.toml", "--set", 'mesh.file="opt.msh"', cwd=workdir)
     assert good.status == 0, str(good)
     assert not (workdir / "ran_opt").exists()
+
+
+def test_scene_with_byte_order_mark(workdir):
+    """A scene saved with a UTF-8 byte-order mark (as some editors do) is read."""
+    out = cli("check", workdir / "bom.toml", cwd=workdir)
+    assert out.status == 0 and out.stderr == "", str(out)
 
 
 def test_debug_shows_traceback(workdir):
@@ -697,3 +811,17 @@ def test_mpirun_matches_serial(workdir, good_run):
     _, serial_crows = read_csv(serial_dir / "contact.csv")
     assert [(r["step"], r["increment"], r["node"], r["status"]) for r in crows] == \
         [(r["step"], r["increment"], r["node"], r["status"]) for r in serial_crows]
+
+
+MPI_CASES = ["mesh_is_a_geo_script", "mesh_tangled_cell", "mesh_nan_coordinate",
+             "slave_spans_two_bodies", "interior_slave", "rigid_named_like_facet_group"]
+
+
+@pytest.mark.skipif(shutil.which("mpirun") is None, reason="mpirun not found")
+@pytest.mark.parametrize("case_id", MPI_CASES)
+def test_bad_input_one_line_under_mpirun(workdir, case_id):
+    """Mesh and group checks that are collective: one line from rank 0, exit 2 on 2 ranks."""
+    case = next(c for c in CASES if c.id == case_id)
+    out = mpirun_cli(2, *case.argv(workdir))
+    assert_one_line_error(out, case.expect)
+    assert not (workdir / "never").exists() and not (workdir / "ran_script").exists()

@@ -580,6 +580,43 @@ BAD = [
      ["output.reactions.1"]),
     ("fields-not-bool", "example", [put("output.fields", "yes")], ["output.fields"]),
     ("unknown-output-key", "example", [put("output.format", "vtk")], ["output.format"]),
+    # numbers beyond the float range, not finite, or absurdly large
+    ("E-overflows-default-K", "example", [put("body.0.E", 1e307)],
+     ["body.0.E = 1e+307", "K = 50 E", "overflows"]),
+    ("E-huge-integer", "example", [put("body.1.E", 10**400)], ["body.1.E = 1000", "finite"]),
+    ("nu-nan", "example", [put("body.0.nu", math.nan)], ["body.0.nu = nan", "finite"]),
+    ("u-nan", "example", [put("step.0.bc.0.u", [0.0, math.nan, 0.0])],
+     ["step.0.bc.0.u.1 = nan", "finite"]),
+    ("pressure-inf", "rigid3d", [put("step.1.load.0.pressure", -math.inf)],
+     ["step.1.load.0.pressure = -inf", "finite"]),
+    ("radius-inf", "rigid3d", [put("rigid.0.radius", math.inf)], ["rigid.0.radius = inf"]),
+    ("center-nan", "rigid3d", [put("rigid.0.center", [0.0, math.nan, 0.0])],
+     ["rigid.0.center.1 = nan"]),
+    ("increments-huge-integer", "example", [put("step.1.increments", 10**400)],
+     ["step.1.increments = 1000", "<= 1000000"]),
+    ("increments-a-million-and-one", "example", [put("step.1.increments", 1_000_001)],
+     ["step.1.increments = 1000001", "<= 1000000"]),
+    ("max_cutbacks-51", "example", [put("step.0.max_cutbacks", 51)],
+     ["step.0.max_cutbacks = 51", "<= 50"]),
+    ("max_iterations-huge", "example", [put("step.0.max_iterations", 10**30)],
+     ["step.0.max_iterations", "<= 10000"]),
+    ("pairing_iterations-huge", "example", [put("contact.0.pairing_iterations", 2**63)],
+     ["contact.0.pairing_iterations", "<= 10000"]),
+    ("nested-too-deep", "example", [put("output.x", [[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]])],
+     ["output.x.0.0...", "nested more than 32 levels"]),
+    # tabular laws: pressures >= 0 and increasing
+    ("tabular-negative-pressure", "rigid3d", [put("contact.0.law", "tabular"),
+                                              put("contact.0.table", [[-1.0, 0], [1.0, 1e-3]])],
+     ["contact.0.table.0.0 = -1.0", ">= 0"]),
+    ("tabular-decreasing-pressure", "rigid3d",
+     [put("contact.0.law", "tabular"), put("contact.0.table", [[0, 0], [2.0, 1e-3], [1.0, 2e-3]])],
+     ["contact.0.table.2.0 = 1.0", "increase", "previous: 2"]),
+    ("tabular-equal-pressures", "rigid3d",
+     [put("contact.0.law", "tabular"), put("contact.0.table", [[0, 0], [1.0, 1e-3], [1.0, 2e-3]])],
+     ["contact.0.table.2.0 = 1.0", "increase"]),
+    ("tabular-nan-overclosure", "rigid3d",
+     [put("contact.0.law", "tabular"), put("contact.0.table", [[0, 0], [1.0, math.nan]])],
+     ["contact.0.table.1.1 = nan", "finite"]),
 ]
 
 
@@ -620,6 +657,11 @@ BAD_SETS = [
     ("bad-value-validated", "step.1.increments=0", ["step.1.increments = 0"]),
     ("bad-free-validated", "step.0.bc.0.u.2=fre", ['step.0.bc.0.u.2 = "fre"']),
     ("unknown-table-validated", "outptu.fields=false", ["outptu", "did you mean 'output'"]),
+    ("inf", "body.0.E=inf", ["body.0.E = inf", "finite"]),
+    ("nan-component", "step.0.bc.0.u.1=nan", ["step.0.bc.0.u.1 = nan", "finite"]),
+    ("beyond-float-range", "contact.0.mu=1e400", ["contact.0.mu = inf", "finite"]),
+    ("huge-integer", "step.1.increments=1" + "0" * 400, ["step.1.increments", "<= 1000000"]),
+    ("nested-900-deep", "body.0.E=" + "[" * 900 + "]" * 900, ["body.0.E", "must be a number"]),
 ]
 
 
@@ -652,6 +694,28 @@ def test_duplicate_toml_key_is_a_syntax_error(tmp_path):
     path = write(tmp_path, EXAMPLE.replace("nu = 0.3\n", "nu = 0.3\nnu = 0.2\n", 1))
     with pytest.raises(SceneError, match=r"scene\.toml:\d+"):
         load_scene(path)
+
+
+def test_byte_order_mark_is_skipped(tmp_path):
+    plain = load_scene(write(tmp_path, EXAMPLE))
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + EXAMPLE.encode())
+    assert load_scene(path).bodies == plain.bodies
+    path.write_bytes(b"\xef\xbb\xbf" + EXAMPLE.replace("E = 200000.0", "E = = 1", 1).encode())
+    with pytest.raises(SceneError, match=r"bom\.toml:8:5: TOML"):  # lines counted as without it
+        load_scene(path)
+
+
+@pytest.mark.parametrize("depth", [600, 1000])
+@pytest.mark.parametrize("kind", ["array", "table"])
+def test_deeply_nested_toml(tmp_path, depth, kind):
+    value = ("[" * depth + "]" * depth if kind == "array"
+             else "{a = " * depth + "1" + "}" * depth)
+    path = write(tmp_path, f"x = {value}\n" + EXAMPLE)
+    with pytest.raises(SceneError, match="nested too deeply") as caught:
+        load_scene(path)
+    assert str(caught.value).startswith(f"{path}: ")
+    assert_one_line(caught.value)
 
 
 def test_missing_scene_file(tmp_path):

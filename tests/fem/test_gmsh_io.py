@@ -484,6 +484,42 @@ def test_absurd_node_count(boxes_file, binary):
     expect_error(path, ["lower"], r"huge_.*declares 1000000000000 nodes")
 
 
+@pytest.mark.parametrize("moved, said", [((np.nan, 0.5, 0.0), "non-finite node coordinates"),
+                                         ((1.0, 1.0, 0.0), "zero or negative measure"),
+                                         ((1.2, 1.3, 0.0), "zero or negative measure")])
+def test_degenerate_body(shared_dir, moved, said):
+    """2x2 quadrilaterals whose centre node is moved: to NaN, onto a corner (a cell of zero
+    area), out past a corner (tangled cells)."""
+    path = shared_dir / "quads.msh"
+
+    def make():
+        with gmsh_session():
+            gmsh.model.add("quads")
+            s = gmsh.model.occ.addRectangle(0, 0, 0, 1, 1)
+            gmsh.model.occ.synchronize()
+            for _, c in gmsh.model.getEntities(1):
+                gmsh.model.mesh.setTransfiniteCurve(c, 3)
+            gmsh.model.mesh.setTransfiniteSurface(s)
+            gmsh.model.mesh.setRecombine(2, s)
+            gmsh.model.mesh.generate(2)
+            tag = gmsh.model.addPhysicalGroup(2, [s])
+            gmsh.model.setPhysicalName(2, tag, "plate")
+            tags, x, _ = gmsh.model.mesh.getNodes()
+            centre = int(np.argmin(np.linalg.norm(np.reshape(x, (-1, 3)) - (0.5, 0.5, 0), axis=1)))
+            gmsh.model.mesh.setNode(int(tags[centre]), list(moved), [])
+            write(path)
+
+    on_root(make)
+    expect_error(path, ["plate"], rf"quads\.msh.*body 'plate' has .*{said}")
+
+
+def test_group_touches_and_interior_facets(boxes_file):
+    ms = load_mesh(boxes_file, ["lower", "upper"], comm)
+    assert ms.group_bodies["left"] == () and ms.group_touches["left"] == ("lower", "upper")
+    assert ms.bodies["lower"].interior_facets("bottom") == 0
+    assert ms.bodies["upper"].interior_facets("interface") == 0  # a boundary of each body
+
+
 def test_no_named_groups(shared_dir):
     path = shared_dir / "unnamed.msh"
 
