@@ -49,7 +49,7 @@ COMPARE_RTOL="${COMPARE_RTOL:-1e-6}"
 
 PACKAGES=(
     python3-dolfinx python3-gmsh python3-scipy python3-pytest python3-hypothesis
-    python3-pyvista python3-matplotlib libegl1 openmpi-bin
+    python3-pyvista python3-matplotlib python3-numba python3-tqdm libegl1 openmpi-bin
     # Debian 13's VTK renders through X only: pictures need a virtual X server
     xvfb xauth
     # (calculix-ccx is not in trixie: the CalculiX peer tests skip there)

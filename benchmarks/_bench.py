@@ -5,8 +5,8 @@
   like for like.
 * :func:`timed_run` runs a scene in memory and returns the numbers the
   benchmarks tabulate.  Phase times come from the solver's own timers, which
-  (see :func:`phase_clock`) record this process's CPU time
-  (:func:`time.process_time`) next to the wall clock: the benchmark machine is
+  record this process's CPU time (:func:`time.process_time`) next to the wall
+  clock: the benchmark machine is
   shared with other jobs, and time-sharing inflates wall times by an unknown,
   varying factor, so the tables show CPU seconds and list the wall seconds too.
 * :func:`machine` describes the machine (nproc, CPU, RAM, date, load average),
@@ -111,47 +111,6 @@ def children_cpu() -> float:
 
 
 # ----------------------------------------------------------------------------- runs
-class _Stamp(float):
-    """A wall-clock reading that also carries the process CPU time; differences keep both."""
-
-    cpu: float
-
-    def __new__(cls, wall: float, cpu: float):
-        obj = super().__new__(cls, wall)
-        obj.cpu = cpu
-        return obj
-
-    def __sub__(self, other):
-        return _Stamp(float(self) - float(other), self.cpu - getattr(other, "cpu", 0.0))
-
-
-def _stamp() -> _Stamp:
-    return _Stamp(time.perf_counter(), time.process_time())
-
-
-@contextlib.contextmanager
-def phase_clock(cpu_phases: dict):
-    """Let the solver's phase timers record CPU seconds (into ``cpu_phases``) next to the
-    wall seconds they normally keep (the package is not modified: its modules' ``time``
-    is swapped for a clock whose readings carry both, and ``Timers.add`` is wrapped)."""
-    import dolfinx_friction.api as api
-    import dolfinx_friction.solver as solver
-    from dolfinx_friction.problem import Timers
-    shim = types.SimpleNamespace(perf_counter=_stamp)
-    old = api.time, solver.time, Timers.add
-
-    def add(self, phase, seconds):
-        old[2](self, phase, float(seconds))
-        cpu_phases[phase] = cpu_phases.get(phase, 0.0) + getattr(seconds, "cpu", 0.0)
-
-    api.time = solver.time = shim
-    Timers.add = add
-    try:
-        yield
-    finally:
-        api.time, solver.time, Timers.add = old
-
-
 class _Stop(Exception):
     pass
 
@@ -161,11 +120,11 @@ def _run_first(scene, comm, max_increments: int, **kwargs):
     from dolfinx_friction.api import RunResult
     from dolfinx_friction.problem import ContactProblem
     from dolfinx_friction.solver import Solver
-    start = _stamp()
+    start, cpu = time.perf_counter(), time.process_time()
     problem = ContactProblem(scene, comm)
     solver = Solver(problem, petsc_options=kwargs.get("petsc_options"),
                     reuse_factorisation=kwargs.get("reuse_factorisation", False))
-    solver.timers.add("setup", _stamp() - start)
+    solver.timers.add("setup", time.perf_counter() - start, time.process_time() - cpu)
     increments = []
 
     def record(inc):
@@ -201,18 +160,16 @@ def timed_run(scene, comm=None, max_increments: int | None = None, keep_solver: 
     load0 = load_average()
     comm.barrier()
     w0, c0 = time.perf_counter(), time.process_time()
-    cpu_phases: dict = {}
-    with phase_clock(cpu_phases):
-        if max_increments or keep_solver:
-            result = _run_first(scene, comm, max_increments or 10 ** 9, **kwargs)
-        else:
-            result = run(scene, write=False, comm=comm, **kwargs)
+    if max_increments or keep_solver:
+        result = _run_first(scene, comm, max_increments or 10 ** 9, **kwargs)
+    else:
+        result = run(scene, write=False, comm=comm, **kwargs)
     comm.barrier()
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     s = result.summary
     # phases are per rank; report the slowest rank (what the wall clock waits for)
     phases_wall = {k: comm.allreduce(float(v), op=MPI.MAX) for k, v in s.timers.phases.items()}
-    phases = {k: comm.allreduce(cpu_phases.get(k, 0.0), op=MPI.MAX) for k in phases_wall}
+    phases = {k: comm.allreduce(float(v), op=MPI.MAX) for k, v in s.timers.cpu.items()}
     numbers = {
         "dofs": int(result.problem.u.getSize()),
         "ranks": comm.size,

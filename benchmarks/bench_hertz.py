@@ -125,10 +125,12 @@ def scene(problem: str, n: int, degree: int, k: float):
 def measure(result, problem: str) -> dict:
     """Load, Hertz reference and the measured p0 and a of a converged run."""
     from dolfinx_friction.analytic import effective_modulus, hertz_line, hertz_sphere
+    from dolfinx_friction.surfaces import facet_nodes
     p = result.problem
     d = p.gdim
-    inter = p.interactions[0]
-    el, res = inter.elements, inter.elements.result
+    contact = p.scene.contacts[0]
+    state = p.pair_of(contact).state()
+    s = state.has_element
     E_star = effective_modulus(E, NU)  # rigid plane
     top = "cylinder_top" if problem == "2d" else "sphere_top"
     F = abs(result.increments[-1].reactions[top][d - 1])
@@ -139,18 +141,18 @@ def measure(result, problem: str) -> dict:
         P = 4.0 * F
         a_ref, p0_ref, _ = hertz_sphere(P, R, E_star)
     # p0: nodal pressure of the slave node at the origin
-    X_el = inter.slaves.X[el.slave]
+    X_el = state.X[s]
     centre = int(np.argmin(np.linalg.norm(X_el, axis=1)))
-    p0 = float(res.F_N[centre] / inter.slaves.area[el.slave][centre])
+    p0 = float(state.pressure[s][centre])
     # a: zero of the gap along slave facet edges that straddle the plane
-    p.update_fields()
-    f = inter.slaves.field
+    p.system.scatter()
+    f = p.group_fields(contact.slave)[0]
     X = f.X
     x = X + f.u.x.array.reshape(-1, d)[: len(X)]
     g = x[:, d - 1]  # clearance to the rigid plane through the origin with normal e_{d}
-    facets = inter.slaves._facet_nodes
+    face, facets = facet_nodes(f, f.mesh.groups[contact.slave][1])
     radii = []
-    for i, j in EDGES[inter.slaves.face.name]:
+    for i, j in EDGES[face.name]:
         a_, b_ = facets[:, i], facets[:, j]
         ga, gb = g[a_], g[b_]
         cross = (ga < 0.0) != (gb < 0.0)
@@ -162,11 +164,10 @@ def measure(result, problem: str) -> dict:
     # p0 and a of the elliptic profile p^2 = p0^2 (1 - r^2/a^2) fitted by least squares to
     # the closed nodes with p > 0.2 max p (as demos/hertz_cylinder.py does), leaving out nodes
     # with a negligible share of the slave area (the vertices of T6 faces: 1/999 of a face)
-    pressure = res.F_N / inter.slaves.area[el.slave]
-    area = inter.slaves.area[el.slave]
+    pressure, area = state.pressure[s], state.area[s]
     real = area > 0.05 * np.median(area)
     r = np.linalg.norm(X_el[:, : d - 1], axis=1)
-    closed = (res.status != 0) & real
+    closed = (state.status[s] != 0) & real
     keep = closed & (pressure > 0.2 * pressure[closed].max())
     c0, c1 = np.linalg.lstsq(np.column_stack([np.ones(keep.sum()), r[keep] ** 2]),
                              pressure[keep] ** 2, rcond=None)[0]
@@ -178,7 +179,7 @@ def measure(result, problem: str) -> dict:
             "err_p0_node": abs(p0 / p0_ref - 1.0), "err_a_gap": abs(a_gap / a_ref - 1.0),
             "fit_nodes": int(keep.sum()),
             "crossings": int(len(radii)),
-            "penetration": float(-res.g_N.min() / (A_NOMINAL)) if len(res.g_N) else 0.0}
+            "penetration": float(-state.gap[s].min() / A_NOMINAL) if s.any() else 0.0}
 
 
 def run_series(problem: str, degrees: dict, ks, log, rows: list, save=lambda: None) -> list:

@@ -44,7 +44,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     Raises :class:`ConvergenceError` (after writing ``summary.json``) when an
     increment fails after all cutbacks.
     """
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     if not isinstance(scene, Scene):
         scene = load_scene(Path(scene), list(overrides))
     problem = ContactProblem(scene, comm)
@@ -56,7 +56,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     if write:
         writer = ResultWriter(problem, solver.reaction_groups(), directory, scene.output.fields,
                               scene.output.contact_table, quiet)
-    solver.timers.add("setup", time.perf_counter() - start)
+    solver.timers.add("setup", time.perf_counter() - start, time.process_time() - cpu)
     increments: list[Increment] = []
     warnings: dict[str, str] = {}
 
@@ -77,9 +77,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
                 warn(pair + " detached", f"contact {pair}: {count} slave node(s) in contact slid "
                                          f"off the master surface at t = {inc.t:.4g}")
         if writer is not None:
-            t0 = time.perf_counter()
-            writer.increment(inc)
-            solver.timers.add("output", time.perf_counter() - t0)
+            with solver.timers.measure("output"):
+                writer.increment(inc)
 
     try:
         summary = solver.run(record)

@@ -253,6 +253,45 @@ def bc_on_space(bc, V) -> bool:
     return V._cpp_object.contains(getattr(W, "_cpp_object", W))
 
 
+def cell_function(expr, mesh, shape: tuple, name: str):
+    """A DG0 Function (cell values, as XDMF cell data) of a UFL expression evaluated at
+    the cell midpoints; ``shape`` is the value shape (``()`` for a scalar)."""
+    import basix
+    import dolfinx.fem
+    cell = getattr(basix.CellType, mesh.topology.cell_type.name)
+    midpoint = np.asarray(basix.geometry(cell)).mean(axis=0)[None]
+    if NEW_API:
+        V = dolfinx.fem.functionspace(mesh, ("DG", 0, shape))
+    elif len(shape) == 0:
+        V = dolfinx.fem.FunctionSpace(mesh, ("DG", 0))
+    elif len(shape) == 1:
+        V = dolfinx.fem.VectorFunctionSpace(mesh, ("DG", 0), dim=shape[0])
+    else:
+        V = dolfinx.fem.TensorFunctionSpace(mesh, ("DG", 0), shape=shape)
+    f = dolfinx.fem.Function(V)
+    f.interpolate(dolfinx.fem.Expression(expr, midpoint))
+    f.name = name
+    return f
+
+
+def quadrature_expression(expr, mesh, degree: int):
+    """A compiled UFL expression at the points of a quadrature rule of ``degree`` on the
+    mesh's cells."""
+    import basix
+    import dolfinx.fem
+    cell = getattr(basix.CellType, mesh.topology.cell_type.name)
+    points, _ = basix.make_quadrature(cell, degree)
+    return dolfinx.fem.Expression(expr, points)
+
+
+def evaluate_on_owned_cells(expression, mesh) -> np.ndarray:
+    """Values of a compiled expression on this rank's owned cells, (cells, points * size)."""
+    cells = np.arange(mesh.topology.index_map(mesh.topology.dim).size_local, dtype=np.int32)
+    if NEW_API:
+        return np.asarray(expression.eval(mesh, cells))
+    return np.asarray(expression.eval(cells))
+
+
 def tagged(tags, value: int) -> np.ndarray:
     """Local entities of a MeshTags object that carry ``value``."""
     return np.asarray(tags.indices[tags.values == value], dtype=np.int32)
@@ -334,8 +373,10 @@ def _output_function(values: np.ndarray, space_in, space_out, name: str):
     return f
 
 
-def write_fields(path, field, spaces: dict, nodal: dict[str, np.ndarray], t: float) -> None:
-    """Displacement and nodal contact values (owned nodes) of a body into one XDMF file."""
+def write_fields(path, field, spaces: dict, nodal: dict[str, np.ndarray], t: float,
+                 cell_functions=()) -> None:
+    """Displacement, nodal contact values (owned nodes) and cell functions of a body into
+    one XDMF file."""
     from dolfinx.io import XDMFFile
     mesh = field.V.mesh
     owned = field.n_owned
@@ -349,6 +390,8 @@ def write_fields(path, field, spaces: dict, nodal: dict[str, np.ndarray], t: flo
             vector = values.shape[1] > 1
             f = _output_function(values[:owned], spaces["vector_in" if vector else "scalar_in"],
                                  spaces["vector_out" if vector else "scalar_out"], name)
+            xdmf.write_function(f, t)
+        for f in cell_functions:
             xdmf.write_function(f, t)
 
 

@@ -16,20 +16,30 @@ Vector = tuple[float, ...]
 Component = Optional[float]
 
 LAWS = ("linear", "exponential", "tabular", "hard")
+#: Constitutive models of a body: small-strain linear elasticity, or finite strain (the
+#: scene is then solved geometrically nonlinearly): Saint Venant-Kirchhoff (Green-Lagrange
+#: strain, second Piola-Kirchhoff stress from E and nu: CalculiX's NLGEOM with *ELASTIC) and
+#: compressible Neo-Hooke as CalculiX's *HYPERELASTIC, NEO HOOKE.
+MODELS = ("linear", "saint-venant-kirchhoff", "neo-hookean")
 SHAPES = ("plane", "sphere", "cylinder")
 TANGENTS = ("consistent", "calculix")
 
 
 @dataclass(frozen=True)
 class Body:
-    """A deformable, linear elastic, isotropic body: a physical group of cells."""
+    """A deformable, isotropic elastic body: a physical group of cells."""
 
     name: str
     E: float
     nu: float
     degree: Optional[int] = None  # None: the geometry degree of the mesh
-    plane: str = "strain"  # 2D only: "strain" | "stress"
+    plane: str = "strain"  # 2D only: "strain" | "stress" (small strain only)
     thickness: float = 1.0  # 2D only
+    model: str = "linear"  # one of MODELS
+
+    @property
+    def finite_strain(self) -> bool:
+        return self.model != "linear"
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,6 @@ pairing frozen) while the residual norm does not decrease.
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from typing import Optional
 
@@ -66,10 +65,9 @@ class Newton:
 
     @staticmethod
     def _evaluate(problem: BlockProblem, pairing: bool) -> float:
-        t0 = time.perf_counter()
-        for c in problem.contacts:
-            c.update(problem.x, pairing=pairing)
-        problem.timers.add("contact_search", time.perf_counter() - t0)
+        with problem.timers.measure("contact_search"):
+            for c in problem.contacts:
+                c.update(problem.x, pairing=pairing)
         return problem.residual(problem.x, problem.b)
 
     def solve(self, problem: BlockProblem) -> NewtonTrace:
@@ -93,9 +91,8 @@ class Newton:
             if it == self.max_iterations:
                 break
             A = problem.jacobian(x)
-            t0 = time.perf_counter()
-            solved = self._solver(problem).solve(A, b, dx)
-            problem.timers.add("linear_solve", time.perf_counter() - t0)
+            with problem.timers.measure("linear_solve"):
+                solved = self._solver(problem).solve(A, b, dx)
             if not solved:
                 trace.backtracks.append(0)
                 break
@@ -103,6 +100,7 @@ class Newton:
             trace.backtracks.append(self._line_search(problem, dx, norm, target)
                                     if self.line_search else 0)
         dx.destroy()
+        problem.scatter()
         return trace
 
     def _line_search(self, problem: BlockProblem, dx: PETSc.Vec, norm0: float,

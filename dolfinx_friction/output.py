@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Optional
 
 import numpy as np
-from mpi4py import MPI
+import ufl
 
 from dolfinx_friction import compat
 from dolfinx_friction.contact.element import STATUS_NAMES
@@ -91,9 +91,9 @@ class ResultWriter:
             self.history_header += [f"U_{r.name}_{a}" for a in AXES[:d]]
             self.history_header += [f"F_{r.name}_{a}" for a in AXES[:d]]
         self.reaction_groups = reaction_groups
-        self._node_ids = [self._canonical_ids(i) for i in problem.interactions]
-        offsets = np.cumsum([0] + [len(ids) for ids in self._node_ids])
-        self._node_ids = [ids + off for ids, off in zip(self._node_ids, offsets)]
+        ids = {name: self._canonical_ids(pair.state().X) for name, pair in problem.pairs.items()}
+        offsets = np.cumsum([0] + [self.comm.allreduce(len(i)) for i in ids.values()])
+        self._node_ids = {name: i + off for (name, i), off in zip(ids.items(), offsets)}
         if self.rank0:
             _append(self.dir / "history.csv", ",".join(self.history_header) + "\n")
             if contact_table:
@@ -127,11 +127,11 @@ class ResultWriter:
         if error:
             raise OutputError(error)
 
-    def _canonical_ids(self, inter) -> np.ndarray:
+    def _canonical_ids(self, X_local: np.ndarray) -> np.ndarray:
         """Slave node numbers that do not depend on the partition: order of reference
         coordinates, rounded to 1e-9 of the surface's extent (the coordinates of a node may
         differ in the last bits between partitions: they are tabulated from different cells)."""
-        X = self.comm.gather(inter.slaves.X, root=0)
+        X = self.comm.gather(X_local, root=0)
         ids = None
         if self.rank0:
             allX = np.concatenate(X)
@@ -167,14 +167,12 @@ class ResultWriter:
 
     def _contact_rows(self, inc: Increment) -> None:
         blocks = []
-        for inter, ids in zip(self.problem.interactions, self._node_ids):
-            el, r = inter.elements, inter.elements.result
-            s = el.slave
-            area = inter.slaves.area[s]
-            slip = (np.linalg.norm(r.trial.g_p, axis=1) if r.trial is not None
-                    else np.zeros(len(s)))
-            blocks.append(np.column_stack([ids[s], inter.slaves.X[s], r.g_N, r.F_N / area, r.F_N,
-                                           r.F_T, slip, r.status]))
+        for name, pair in self.problem.pairs.items():
+            st = pair.state()
+            s = st.has_element
+            blocks.append(np.column_stack([self._node_ids[name][s], st.X[s], st.gap[s],
+                                           st.pressure[s], st.normal_force[s],
+                                           st.tangential_force[s], st.slip[s], st.status[s]]))
         width = 3 + 3 * self.problem.gdim + 3
         local = np.concatenate(blocks) if blocks else np.zeros((0, width))
         rows = self.comm.gather(local, root=0)
@@ -192,7 +190,7 @@ class ResultWriter:
     def summary(self, run: RunSummary, extra: Optional[dict] = None) -> None:
         p = self.problem
         n_dofs = p.layout.n_global * p.gdim
-        slaves = self.comm.allreduce(sum(len(i.slaves.nodes) for i in p.interactions))
+        slaves = self.comm.allreduce(sum(len(pair.state().nodes) for pair in p.pairs.values()))
         if not self.rank0:
             return
         scene = p.scene
@@ -233,18 +231,25 @@ class FieldWriter:
         n, d = len(field.X), self.problem.gdim
         out = {"contact_pressure": np.zeros((n, 1)), "tangential_traction": np.zeros((n, d)),
                "slip": np.zeros((n, 1)), "status": np.full((n, 1), -1.0)}
-        for k, inter in enumerate(self.problem.interactions):
-            if self.problem.group_fields(self.problem.scene.contacts[k].slave)[0] is not field:
+        for contact in self.problem.scene.contacts:
+            if self.problem.group_fields(contact.slave)[0] is not field:
                 continue
-            el, r = inter.elements, inter.elements.result
-            nodes = inter.slaves.local[el.slave]
-            area = inter.slaves.area[el.slave]
-            out["contact_pressure"][nodes, 0] = r.F_N / area
-            out["tangential_traction"][nodes] = r.F_T / area[:, None]
-            if r.trial is not None:
-                out["slip"][nodes, 0] = np.linalg.norm(r.trial.g_p, axis=1)
-            out["status"][nodes, 0] = r.status
+            st = self.problem.pair_of(contact).state()
+            s = st.has_element
+            nodes = st.nodes[s]
+            out["contact_pressure"][nodes, 0] = st.pressure[s]
+            out["tangential_traction"][nodes] = st.traction[s]  # acting on the slave body
+            out["slip"][nodes, 0] = st.slip[s]
+            out["status"][nodes, 0] = st.status[s]
         return out
+
+    def _stresses(self, field) -> list:
+        """Cell functions: the Cauchy stress (gdim x gdim) and its von Mises stress."""
+        from dolfinx_friction.problem import cauchy_stress, von_mises
+        sigma, d, mesh = cauchy_stress(field), field.gdim, field.V.mesh
+        in_plane = ufl.as_matrix([[sigma[i, j] for j in range(d)] for i in range(d)])
+        return [compat.cell_function(in_plane, mesh, (d, d), "cauchy_stress"),
+                compat.cell_function(von_mises(sigma), mesh, (), "von_mises")]
 
     def write(self, inc: Increment) -> None:
         comm = self.problem.comm
@@ -254,10 +259,10 @@ class FieldWriter:
             shutil.rmtree(scratch, ignore_errors=True)
             scratch.mkdir()
         comm.barrier()
-        self.problem.update_fields()
+        self.problem.system.scatter()
         for field, spaces in zip(self.problem.fields, self.outputs):
             compat.write_fields(scratch / f"{field.body.name}.xdmf", field, spaces,
-                                self._contact_fields(field), inc.t)
+                                self._contact_fields(field), inc.t, self._stresses(field))
         comm.barrier()
         if comm.rank == 0:
             os.replace(scratch, self.dir / name)

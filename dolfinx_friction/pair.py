@@ -34,16 +34,25 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction import compat
-from dolfinx_friction.contact.element import OPEN, ContactParameters
-from dolfinx_friction.contact.laws import Law
+from dolfinx_friction.contact.element import ContactParameters
+from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.fields import BodyField, DofLayout
 from dolfinx_friction.gmsh_io import BodyMesh
 from dolfinx_friction.interaction import ContactInteraction, RigidMaster
 from dolfinx_friction.model import Body, ContactPair, Rigid
-from dolfinx_friction.problem import make_law
 from dolfinx_friction.surfaces import SlaveNodes, master_faces
 
 NO_ELEMENT = -1  #: status of a slave node without a contact element (far from the master)
+
+
+def make_law(pair: ContactPair) -> Law:
+    """The pressure-overclosure law of a scene pair (defaults resolved)."""
+    if pair.law == "exponential":
+        return Exponential(pair.c0, pair.p0)
+    if pair.law == "tabular":
+        p, d = zip(*pair.table)
+        return Tabular(tuple(p), tuple(d))
+    return Linear(pair.K, pair.sigma_inf, pair.c0)
 
 
 class ContactSetupError(ValueError):
@@ -105,27 +114,34 @@ def rigid_cylinder(point: Sequence[float], axis: Sequence[float], radius: float,
 class ContactState:
     """The contact at the slave nodes this rank owns, arrays of length ``n``.
 
-    ``status``: :data:`NO_ELEMENT` (-1), 0 open, 1 stick, 2 slip.  ``pressure`` [force /
-    area] > 0 in compression; ``traction`` (n, gdim) [force / area] is the tangential
-    traction acting on the slave body; ``force`` (n, gdim) [force] the whole contact force
-    on the slave node; ``gap`` [length] the clearance (< 0: overclosure); ``slip``
-    [length] the accumulated slip; ``area`` the node's representative area.  Nodes
-    without an element have zeros.
+    ``status``: :data:`NO_ELEMENT` (-1), 0 open, 1 stick, 2 slip.  ``normal_force``
+    [force] > 0 in compression (slightly negative for an open element within the linear
+    law's tension range), ``pressure`` = ``normal_force / area`` [force / area];
+    ``tangential_force`` (n, gdim) [force] is the friction force of the slave node on the
+    master, ``traction`` = ``-tangential_force / area`` the tangential traction acting on
+    the slave body; ``force`` (n, gdim) [force] the whole contact force on the slave node;
+    ``gap`` [length] the clearance (< 0: overclosure); ``slip`` [length] the accumulated
+    slip; ``area`` the node's representative area (deformed, at the increment's start).
+    Nodes without an element have zeros.
     """
 
     nodes: np.ndarray  # (n,) local node (dof block) index in the slave space
+    X: np.ndarray  # (n, gdim) reference coordinates
     x: np.ndarray  # (n, gdim) current coordinates
     status: np.ndarray
     gap: np.ndarray
+    normal_force: np.ndarray
     pressure: np.ndarray
+    tangential_force: np.ndarray
     traction: np.ndarray
     slip: np.ndarray
     force: np.ndarray
     area: np.ndarray
 
-
-def _space_label(V) -> str:
-    return f"space on a {V.mesh.topology.dim}D mesh"
+    @property
+    def has_element(self) -> np.ndarray:
+        """(n,) bool: the nodes paired with a master (open or closed)."""
+        return self.status != NO_ELEMENT
 
 
 def _check_space(V, role: str) -> int:
@@ -195,7 +211,8 @@ class NodeToSurface:
                  stick_slope: Optional[float] = None, E: Optional[float] = None,
                  tangent: str = "consistent", thickness: float = 1.0,
                  pairing_iterations: int = 8, name: str = "contact",
-                 obstacle_index: Optional[int] = None, n_obstacles: int = 0):
+                 obstacle_index: Optional[int] = None, n_obstacles: int = 0,
+                 body_names: tuple[str, str] = ("slave", "master")):
         comm = slave.V.mesh.comm
         self.comm, self.name = comm, name
         self.gdim = _check_space(slave.V, f"{name}: slave")
@@ -211,6 +228,7 @@ class NodeToSurface:
         self.layout = DofLayout(comm, [V.dofmap.index_map for V in self.spaces], n_obstacles)
         slave_facets = _facets(slave, f"{name}: slave", comm)
         self._fields: list[BodyField] = []
+        self._body_names = body_names
         slave_field = self._field(slave.V, "slave", slave_facets, thickness)
         if rigid:
             if master.shape == "cylinder" and self.gdim != 3:
@@ -312,7 +330,8 @@ class NodeToSurface:
             existing.mesh.groups[group] = (V.mesh.topology.dim - 1, facets)
             return existing
         mesh = V.mesh
-        body = Body(f"{self.name}:{group}", E=1.0, nu=0.0, thickness=float(thickness))
+        name = self._body_names[0 if group == "slave" else 1]
+        body = Body(name, E=1.0, nu=0.0, thickness=float(thickness))
         groups = {group: (mesh.topology.dim - 1, facets)}
         X = V.tabulate_dof_coordinates()[:, : self.gdim].copy()
         f = BodyField(body, BodyMesh(body.name, mesh, groups), V, compat.function(V), block,
@@ -391,7 +410,7 @@ class NodeToSurface:
         nodes of a rigid obstacle (no dofs)."""
         nodes = self._interaction.candidates.nodes
         d = self.gdim
-        dofs = (nodes[:, :, None] * d + np.arange(d)).reshape(len(nodes), -1)
+        dofs = (nodes[:, :, None] * d + np.arange(d)).reshape(len(nodes), nodes.shape[1] * d)
         dofs[np.repeat(nodes < 0, d, axis=1)] = -1
         return dofs
 
@@ -429,7 +448,7 @@ class NodeToSurface:
         ``b`` (collective; ``b`` is assembled afterwards)."""
         el = self._evaluated()
         dofs = self._masked_dofs(bcs)[el.candidate]
-        values = el.result.f.reshape(len(dofs), -1)
+        values = el.result.f.reshape(len(dofs), dofs.shape[1])
         keep = dofs >= 0
         b.setValues(dofs[keep].astype(PETSc.IntType), values[keep], addv=PETSc.InsertMode.ADD)
         b.assemble()
@@ -503,16 +522,20 @@ class NodeToSurface:
         inter = self._interaction
         slaves = inter.slaves
         n, d = len(slaves.nodes), self.gdim
-        out = ContactState(slaves.local.copy(), slaves.X + self._u_slaves,
-                           np.full(n, NO_ELEMENT), np.zeros(n), np.zeros(n), np.zeros((n, d)),
-                           np.zeros(n), np.zeros((n, d)), slaves.area.copy())
+        zero, zeros = np.zeros(n), np.zeros((n, d))
+        out = ContactState(slaves.local.copy(), slaves.X.copy(), slaves.X + self._u_slaves,
+                           np.full(n, NO_ELEMENT), zero.copy(), zero.copy(), zero.copy(),
+                           zeros.copy(), zeros.copy(), zero.copy(), zeros.copy(),
+                           slaves.area.copy())
         el = inter.elements
         r = el.result
         if r is not None:
             s, area = el.slave, slaves.area[el.slave]
             out.status[s] = r.status
             out.gap[s] = r.g_N
-            out.pressure[s] = np.where(r.status != OPEN, r.F_N, 0.0) / area
+            out.normal_force[s] = r.F_N
+            out.pressure[s] = r.F_N / area
+            out.tangential_force[s] = r.F_T
             out.traction[s] = -r.F_T / area[:, None]
             out.force[s] = -r.f[:, -1, :]
             if r.trial is not None:

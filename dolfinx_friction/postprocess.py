@@ -6,19 +6,21 @@ import numpy as np
 
 def contact_state(result, pair: int = 0) -> dict[str, np.ndarray]:
     """Reference coordinates, pressure, forces, gap and status of the slave nodes with an
-    element in contact pair ``pair`` (current increment), gathered on every rank.
+    element in contact pair ``pair`` (its index in the scene; current increment), gathered
+    on every rank.
 
     ``X_all`` holds the reference coordinates of every slave node of the pair.
     """
-    inter = result.problem.interactions[pair]
-    comm = result.problem.comm
-    el, r = inter.elements, inter.elements.result
-    area = inter.slaves.area[el.slave]
-    local = dict(X=inter.slaves.X[el.slave], pressure=r.F_N / area, F_N=r.F_N, F_T=r.F_T,
-                 area=area, status=r.status, g_N=r.g_N)
+    problem = result.problem
+    st = problem.pair_of(problem.scene.contacts[pair]).state()
+    s = st.has_element
+    local = dict(X=st.X[s], pressure=st.pressure[s], F_N=st.normal_force[s],
+                 F_T=st.tangential_force[s], area=st.area[s], status=st.status[s],
+                 g_N=st.gap[s])
+    comm = problem.comm
     parts = comm.allgather(local)
     out = {k: np.concatenate([p[k] for p in parts]) for k in local}
-    out["X_all"] = np.concatenate(comm.allgather(inter.slaves.X))
+    out["X_all"] = np.concatenate(comm.allgather(st.X))
     return out
 
 

@@ -1,56 +1,132 @@
-"""The discrete problem: bodies, rigid obstacles, contact pairs and their system numbering.
+"""The discrete problem of a scene: bodies as UFL residuals, obstacles, contact pairs.
 
-Built once from a :class:`~dolfinx_friction.model.Scene`; the solver drives it.
-Residual ``R(u) = K u - f_ext + f_contact(u)``; the Jacobian is the bulk
-stiffness plus the contact tangents, filled into a matrix whose pattern holds
-the couplings of the current contact elements.
+Built once from a :class:`~dolfinx_friction.model.Scene` on the composable core: each
+body's small-strain linear elastic residual is a UFL form of its own dolfinx space, each
+``[[contact]]`` a :class:`~dolfinx_friction.pair.NodeToSurface` (matched by name), and
+every ``[[rigid]]`` obstacle's translation an unknown of the
+:class:`~dolfinx_friction.system.BlockProblem` that joins them.  The solver drives it.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
+import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from dolfinx_friction import bulk, gmsh_io
-from dolfinx_friction.assembly import CooPattern
-from dolfinx_friction.contact.element import ContactParameters
-from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
-from dolfinx_friction.fields import BodyField, DofLayout, make_fields
-from dolfinx_friction.interaction import ContactInteraction, RigidMaster
-from dolfinx_friction.model import ContactPair, Scene
-from dolfinx_friction.surfaces import SlaveNodes, master_faces
+from dolfinx_friction import compat, gmsh_io
+from dolfinx_friction.fields import BodyField, make_fields
+from dolfinx_friction.model import Body, ContactPair, Scene
+from dolfinx_friction.pair import NodeToSurface, Surface, make_law
+from dolfinx_friction.system import BlockProblem, Timers  # noqa: F401  (Timers: re-export)
 
 
 class ModelError(ValueError):
     """The scene does not fit its mesh (a missing group, a group of the wrong kind...)."""
 
 
-def make_law(pair: ContactPair) -> Law:
-    if pair.law == "exponential":
-        return Exponential(pair.c0, pair.p0)
-    if pair.law == "tabular":
-        p, d = zip(*pair.table)
-        return Tabular(tuple(p), tuple(d))
-    return Linear(pair.K, pair.sigma_inf, pair.c0)
+def _lame(body: Body, gdim: int) -> tuple[float, float]:
+    mu = body.E / (2.0 * (1.0 + body.nu))
+    lam = body.E * body.nu / ((1.0 + body.nu) * (1.0 - 2.0 * body.nu))
+    if gdim == 2 and body.plane == "stress":
+        lam = 2.0 * lam * mu / (lam + 2.0 * mu)
+    return lam, mu
 
 
-@dataclass
-class Timers:
-    """Wall time per phase, seconds."""
+def _thickness(field: BodyField) -> float:
+    return field.body.thickness if field.gdim == 2 else 1.0
 
-    phases: dict = field(default_factory=lambda: dict.fromkeys(
-        ["setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
-         "output"], 0.0))
 
-    def add(self, phase: str, seconds: float) -> None:
-        self.phases[phase] += seconds
+def elastic_forms(field: BodyField) -> tuple[ufl.Form, ufl.Form]:
+    """Residual ``(sigma(u), eps(v)) t dx`` of small-strain linear elasticity and its
+    Jacobian (``t``: the thickness of a 2D body)."""
+    lam, mu = _lame(field.body, field.gdim)
+    v, du = ufl.TestFunction(field.V), ufl.TrialFunction(field.V)
+
+    def eps(w):
+        return ufl.sym(ufl.grad(w))
+
+    def sigma(w):
+        return lam * ufl.tr(eps(w)) * ufl.Identity(field.gdim) + 2.0 * mu * eps(w)
+    t = _thickness(field)
+    return (t * ufl.inner(sigma(field.u), eps(v)) * ufl.dx,
+            t * ufl.inner(sigma(du), eps(v)) * ufl.dx)
+
+
+def deformation_gradient(u, gdim: int):
+    """``(F, F3)``: the deformation gradient as a UFL variable, and as 3 x 3 (plane strain
+    in 2D: ``F33 = 1``)."""
+    F = ufl.variable(ufl.Identity(gdim) + ufl.grad(u))
+    if gdim == 3:
+        return F, F
+    return F, ufl.as_matrix([[F[0, 0], F[0, 1], 0], [F[1, 0], F[1, 1], 0], [0, 0, 1]])
+
+
+def strain_energy(body: Body, F3):
+    """Strain energy density per reference volume of a finite-strain model.
+
+    Saint Venant-Kirchhoff: ``W = lam/2 tr(E)^2 + mu tr(E^2)``, ``E = (F^T F - I)/2``.
+    Neo-Hooke (CalculiX's NEO HOOKE): ``W = C10 (I1bar - 3) + (J - 1)^2 / D1`` with
+    ``I1bar = J^(-2/3) tr(F^T F)``, ``C10 = mu/2``, ``D1 = 2/kappa``, ``kappa = E/(3(1-2nu))``.
+    """
+    mu = body.E / (2.0 * (1.0 + body.nu))
+    C = F3.T * F3
+    if body.model == "saint-venant-kirchhoff":
+        lam = body.E * body.nu / ((1.0 + body.nu) * (1.0 - 2.0 * body.nu))
+        E = 0.5 * (C - ufl.Identity(3))
+        return 0.5 * lam * ufl.tr(E) ** 2 + mu * ufl.inner(E, E)
+    if body.model == "neo-hookean":
+        kappa = body.E / (3.0 * (1.0 - 2.0 * body.nu))
+        J = ufl.det(F3)
+        return 0.5 * mu * (J ** (-2.0 / 3.0) * ufl.tr(C) - 3.0) + 0.5 * kappa * (J - 1.0) ** 2
+    raise ValueError(f"body {body.name!r}: unknown model {body.model!r}")
+
+
+def cauchy_stress(field: BodyField):
+    """The body's Cauchy stress as a 3 x 3 UFL tensor (plane strain in 2D: with the
+    out-of-plane normal stress)."""
+    body, d = field.body, field.gdim
+    if not body.finite_strain:
+        lam, mu = _lame(body, d)
+        eps = ufl.sym(ufl.grad(field.u))
+        sigma = lam * ufl.tr(eps) * ufl.Identity(d) + 2.0 * mu * eps
+        if d == 3:
+            return sigma
+        s33 = lam * ufl.tr(eps) if body.plane == "strain" else 0.0
+        return ufl.as_matrix([[sigma[0, 0], sigma[0, 1], 0], [sigma[1, 0], sigma[1, 1], 0],
+                              [0, 0, s33]])
+    F, F3 = deformation_gradient(field.u, d)
+    F3v = ufl.variable(F3)
+    P = ufl.diff(strain_energy(body, F3v), F3v)
+    return P * F3.T / ufl.det(F3)
+
+
+def von_mises(sigma):
+    """``sqrt(3/2 s:s)`` of a 3 x 3 stress tensor, ``s`` its deviator."""
+    s = sigma - ufl.tr(sigma) / 3.0 * ufl.Identity(3)
+    return ufl.sqrt(1.5 * ufl.inner(s, s))
+
+
+def body_forms(field: BodyField) -> tuple[ufl.Form, Optional[ufl.Form]]:
+    """The body's residual form and Jacobian (None: ``ufl.derivative``): small-strain
+    elasticity, or the first Piola-Kirchhoff stress ``P = dW/dF`` of its finite-strain
+    model against the gradient of the test function (reference configuration)."""
+    if not field.body.finite_strain:
+        return elastic_forms(field)
+    F, F3 = deformation_gradient(field.u, field.gdim)
+    P = ufl.diff(strain_energy(field.body, F3), F)
+    v = ufl.TestFunction(field.V)
+    return _thickness(field) * ufl.inner(P, ufl.grad(v)) * ufl.dx, None
 
 
 class ContactProblem:
-    """Everything the Newton solver needs, in system numbering."""
+    """A scene's bodies, obstacles and contact pairs as one :class:`BlockProblem`.
+
+    ``pairs`` maps each contact's name (``"slave->master"``) to its
+    :class:`NodeToSurface`; ``system.x`` is the displacement (the only copy: the bodies'
+    Functions are refreshed from it).
+    """
 
     def __init__(self, scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD,
                  meshes: Optional[gmsh_io.MeshSet] = None):
@@ -61,17 +137,59 @@ class ContactProblem:
         self._check_groups()
         self.fields, self.layout = make_fields(
             comm, [(b, self.meshes.bodies[b.name]) for b in scene.bodies], len(scene.rigids))
-        d = self.gdim
-        n_local = self.layout.n_owned * d
-        self.u = PETSc.Vec().createMPI((n_local, PETSc.DETERMINE), comm=comm)
-        self.u.set(0.0)
-        entries = [bulk.stiffness_entries(f, self.layout) for f in self.fields]
-        rows, cols, vals = (np.concatenate([e[k] for e in entries]) for k in range(3))
-        self.bulk_pattern = CooPattern(comm, n_local, [(rows, cols)])
-        self.bulk_data = self.bulk_pattern.gather_values(0, vals)  # CSR values
-        self.K_bulk = self.bulk_pattern.create_matrix()
-        self.bulk_pattern.fill(self.K_bulk, self.bulk_data)
-        self.interactions = [self._interaction(k, c) for k, c in enumerate(scene.contacts)]
+        self.pairs = {f"{c.slave}->{c.master}": self._pair(c) for c in scene.contacts}
+        self.follower_pressures = self._follower_pressures()
+        forms = [self._forms(f) for f in self.fields]
+        self.system = BlockProblem([F for F, _ in forms], [f.u for f in self.fields],
+                                   contacts=list(self.pairs.values()),
+                                   jacobians=[J for _, J in forms],
+                                   obstacles=len(scene.rigids))
+        self.system.guards += [self._inversion_guard(f) for f in self.fields
+                               if f.body.finite_strain]
+
+    def _follower_pressures(self) -> dict[tuple[str, str], object]:
+        """A Constant per (finite-strain body, group) that some step loads with a pressure:
+        such a pressure follows the deformed face (its load stiffness is in the Jacobian)."""
+        out = {}
+        for step in self.scene.steps:
+            for load in step.loads:
+                if load.pressure is None:
+                    continue
+                for f in self.group_fields(load.on):
+                    if f.body.finite_strain and (f.body.name, load.on) not in out:
+                        out[(f.body.name, load.on)] = compat.scalar_constant(f.V.mesh, 0.0)
+        return out
+
+    def _forms(self, field: BodyField) -> tuple[ufl.Form, Optional[ufl.Form]]:
+        F, J = body_forms(field)
+        for (body, group), p in self.follower_pressures.items():
+            if body != field.body.name:
+                continue
+            tags, _ = field.mesh.meshtags(self.gdim - 1, [group])
+            ds = ufl.Measure("ds", domain=field.V.mesh, subdomain_data=tags)(1)
+            G = ufl.Identity(self.gdim) + ufl.grad(field.u)
+            N, v = ufl.FacetNormal(field.V.mesh), ufl.TestFunction(field.V)
+            # Nanson: n da = J F^-T N dA; the pressure pushes into the body
+            F += _thickness(field) * p * ufl.det(G) * ufl.inner(ufl.inv(G).T * N, v) * ds
+        return F, J
+
+    def _inversion_guard(self, field: BodyField):
+        """A check that no quadrature point of a finite-strain body has ``det F <= 0``."""
+        _, F3 = deformation_gradient(field.u, self.gdim)
+        degree = 2 * (field.body.degree or compat.geometry_degree(field.V.mesh))
+        expression = compat.quadrature_expression(ufl.det(F3), field.V.mesh, degree)
+
+        def guard() -> str:
+            J = compat.evaluate_on_owned_cells(expression, field.V.mesh)
+            inverted = self.comm.allreduce(int((J <= 0.0).any() or not np.isfinite(J).all()))
+            return f"an element of body {field.body.name!r} inverts (det F <= 0)" \
+                if inverted else ""
+        return guard
+
+    @property
+    def u(self) -> PETSc.Vec:
+        """The displacement of every body and obstacle, in system numbering."""
+        return self.system.x
 
     # ------------------------------------------------------------ lookups
     def _check_groups(self) -> None:
@@ -162,58 +280,35 @@ class ContactProblem:
         return (node * self.gdim + np.arange(self.gdim))[None]
 
     def rigid_body_modes(self) -> PETSc.NullSpace:
-        """Translations and rotations of all bodies together, orthonormal (collective): the
-        near null space that algebraic multigrid (GAMG) needs for elasticity.  Each body
-        gets the rigid motions of its own nodes; a rigid obstacle only translates."""
-        d = self.gdim
-        modes = [self.u.duplicate() for _ in range(3 if d == 2 else 6)]
-        values = np.zeros((len(modes), self.u.getLocalSize() // d, d))
-        for f in self.fields:
-            nodes = slice(int(self.layout.block_offsets[f.block]),
-                          int(self.layout.block_offsets[f.block + 1]))
-            x = f.X[: f.n_owned]
-            values[:d, nodes] = np.eye(d)[:, None, :]
-            for k, (i, j) in enumerate([(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]):
-                values[d + k, nodes, i], values[d + k, nodes, j] = -x[:, j], x[:, i]
-        for r in self.scene.rigids:
-            values[:d, self.rigid_dofs(r.name)[:, 0] // d] = np.eye(d)[:, None, :]
-        for k, mode in enumerate(modes):  # modified Gram-Schmidt
-            mode.setArray(values[k].ravel())
-            for previous in modes[:k]:
-                mode.axpy(-mode.dot(previous), previous)
-            mode.scale(1.0 / mode.norm())
-        return PETSc.NullSpace().create(vectors=modes, comm=self.comm)
+        """Translations and rotations of every body, orthonormal: the near null space
+        that algebraic multigrid needs (see :meth:`BlockProblem.rigid_body_modes`)."""
+        return self.system.rigid_body_modes()
 
     # ------------------------------------------------------------- contact
-    def _interaction(self, k: int, pair: ContactPair) -> ContactInteraction:
+    def _pair(self, pair: ContactPair) -> NodeToSurface:
         slave_field = self.group_fields(pair.slave)[0]
-        pair = pair.resolved(slave_field.body.E)
-        params = ContactParameters(make_law(pair), pair.mu, pair.stick_slope, pair.tangent)
-        slaves = SlaveNodes(slave_field, pair.slave)
+        body = slave_field.body
+        pair = pair.resolved(body.E)
         rigid = self.scene.rigid(pair.master)
+        fdim = self.gdim - 1
+        slave_tags, _ = slave_field.mesh.meshtags(fdim, [pair.slave])
         if rigid is not None:
-            master = RigidMaster(rigid, self.rigid_node(rigid.name))
+            master, index = rigid, [r.name for r in self.scene.rigids].index(rigid.name)
         else:
-            master = master_faces(self.group_fields(pair.master)[0], pair.master)
-        return ContactInteraction(self.comm, f"{pair.slave}->{pair.master}", params, slaves,
-                                  master, self.gdim, pair.pairing_iterations)
+            master_field = self.group_fields(pair.master)[0]
+            master = Surface(master_field.V, master_field.mesh.meshtags(fdim, [pair.master])[0], 1)
+            index = None
+        return NodeToSurface(
+            Surface(slave_field.V, slave_tags, 1), master, spaces=[f.V for f in self.fields],
+            law=make_law(pair), mu=pair.mu, stick_slope=pair.stick_slope, tangent=pair.tangent,
+            thickness=body.thickness if self.gdim == 2 else 1.0,
+            pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
+            obstacle_index=index, n_obstacles=len(self.scene.rigids),
+            body_names=(body.name, pair.master))
 
-    def update_fields(self) -> None:
-        """Copy the system displacement into the bodies' dolfinx Functions (ghosts included)."""
-        from dolfinx_friction import compat
-        local = self.u.getArray(readonly=True)
-        for f in self.fields:
-            n = f.n_owned * self.gdim
-            f.u.x.array[:n] = local[self.layout.owned_slice(f.block, self.gdim)]
-            compat.scatter_forward(f.u)
-
-    def master_displacements(self, k: int) -> Optional[np.ndarray]:
-        """Current displacement at the nodes of this rank's own master faces of pair ``k``."""
-        inter = self.interactions[k]
-        if inter.rigid:
-            return None
-        f = self.group_fields(self.scene.contacts[k].master)[0]
-        return f.u.x.array.reshape(-1, self.gdim)[inter.master.local]
+    def pair_of(self, contact: ContactPair) -> NodeToSurface:
+        """The :class:`NodeToSurface` of a scene contact."""
+        return self.pairs[f"{contact.slave}->{contact.master}"]
 
 
 def _vectors(scene: Scene) -> list[tuple[str, tuple]]:

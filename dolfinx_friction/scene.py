@@ -29,6 +29,7 @@ from typing import Any, NoReturn, Optional, Union
 from dolfinx_friction.model import (
     BC,
     LAWS,
+    MODELS,
     SHAPES,
     TANGENTS,
     Body,
@@ -450,6 +451,7 @@ _BODY = _record(Body, {
     "degree": _Key(_one_of(1, 2)),
     "plane": _Key(_one_of("strain", "stress")),
     "thickness": _Key(_number(gt=0)),
+    "model": _Key(_one_of(*MODELS)),
 })
 _OUTPUT = _record(Output, {
     "dir": _Key(_name),
@@ -493,6 +495,13 @@ def _check_contacts(scene: Scene) -> None:
         first = seen.setdefault((pair.slave, pair.master), i)
         if first != i:
             _fail(f"contact.{i}", f"same slave and master as contact.{first}")
+
+
+def _check_models(scene: Scene) -> None:
+    for i, body in enumerate(scene.bodies):
+        if body.finite_strain and body.plane == "stress":
+            _fail(f"body.{i}.plane", f"plane stress is not available at finite strain (model "
+                  f"{body.model!r}): use plane strain or a 3D mesh", body.plane)
 
 
 def _check_rigid_motions(scene: Scene) -> None:
@@ -550,6 +559,7 @@ def _check_scene(scene: Scene) -> None:
     _check_unique_names(scene.rigids, "rigid")
     _check_unique_names(scene.steps, "step")
     _check_contacts(scene)
+    _check_models(scene)
     _check_rigid_motions(scene)
     _check_dimension(scene)
 

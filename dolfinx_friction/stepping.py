@@ -22,6 +22,7 @@ class IncrementRecord:
     t: float  # pseudo-time reached, in (0, 1]
     trace: NewtonTrace
     cutbacks: int  # failed attempts before this one
+    work: int  # Newton iterations spent on it, failed attempts included
     penetration: dict[str, float] = field(default_factory=dict)  # per contact: overclosure
     detached: dict[str, int] = field(default_factory=dict)  # per contact: slid off
 
@@ -35,14 +36,16 @@ class IncrementRecord:
 
 
 class ConvergenceError(RuntimeError):
-    """An increment failed after all cutbacks: ``increment`` (1, 2, ...) at pseudo-time
-    ``t``, the last residual norm, and the increments and iterations done before."""
+    """An increment failed after all cutbacks: ``increment`` (1, 2, ...) starting at
+    pseudo-time ``t``, the last residual norm, the converged ``records`` before it, and the
+    cutbacks and Newton iterations spent on the failed increment."""
 
     def __init__(self, increment: int, t: float, residual: float, max_cutbacks: int,
-                 records: list, cutbacks: int, iterations: int):
+                 records: list, cutbacks: int, iterations: int, reason: str = ""):
         super().__init__(f"increment {increment} at t = {t:.6g}: Newton did not converge "
-                         f"after {max_cutbacks} cutbacks (last residual {residual:.3e})")
-        self.increment, self.t, self.residual = increment, t, residual
+                         f"after {max_cutbacks} cutbacks (last residual {residual:.3e}"
+                         + (f": {reason})" if reason else ")"))
+        self.increment, self.t, self.residual, self.reason = increment, t, residual, reason
         self.records, self.cutbacks, self.iterations = records, cutbacks, iterations
 
 
@@ -89,7 +92,7 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
     x = problem.x
     x_n, rate = x.duplicate(), None
     records: list[IncrementRecord] = []
-    t, size, failures, iterations = 0.0, IncrementSize(increments), 0, 0
+    t, size, failures, spent = 0.0, IncrementSize(increments), 0, 0
     while t < 1.0 - 1e-12:
         dt = min(size.current, 1.0 - t)
         x.copy(x_n)
@@ -100,7 +103,7 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
         for c in problem.contacts:
             c.begin(x, start=x_n)
         trace = newton.solve(problem)
-        iterations += trace.iterations
+        spent += trace.iterations
         ok = trace.converged
         if ok and size.level < max_cutbacks and any(c.zone_vanished()
                                                     for c in problem.contacts):
@@ -114,17 +117,17 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
             failures += 1
             if size.level > max_cutbacks:
                 raise ConvergenceError(len(records) + 1, t, trace.residuals[-1], max_cutbacks,
-                                       records, failures, iterations)
+                                       records, failures, spent, problem.inadmissible)
             continue
         size.converged(trace.iterations)
         rate = rate if rate is not None else x.duplicate()
         rate.waxpy(-1.0, x_n, x)
         rate.scale(1.0 / dt)
         t += dt
-        record = IncrementRecord(len(records) + 1, t, trace, failures,
+        record = IncrementRecord(len(records) + 1, t, trace, failures, spent,
                                  {c.name: c.penetration() for c in problem.contacts},
                                  {c.name: c.detached() for c in problem.contacts})
-        failures = 0
+        failures, spent = 0, 0
         records.append(record)
         if on_increment is not None:
             on_increment(record)

@@ -10,10 +10,11 @@ plus the contact tangents, with identity rows where constrained.  A body whose J
 does not depend on its displacement (a linear form) has it assembled once.
 
 ``x`` is the one copy of the displacement: the bodies' Functions are refreshed from it
-(:meth:`~BlockProblem.scatter`) at every evaluation.
+(:meth:`~BlockProblem.scatter`) where an evaluation needs them and after every solve.
 """
 from __future__ import annotations
 
+import contextlib
 import time
 from dataclasses import dataclass, field
 from typing import Optional, Sequence
@@ -36,14 +37,28 @@ ROUNDOFF_FLOOR = 2 * np.finfo(float).eps
 
 @dataclass
 class Timers:
-    """Wall time per phase, seconds."""
+    """Time per phase, seconds: ``phases`` wall clock, ``cpu`` this process's CPU time
+    (on a shared machine the wall clock also counts the other jobs)."""
 
-    phases: dict = field(default_factory=lambda: dict.fromkeys(
-        ["setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
-         "output"], 0.0))
+    phases: dict = field(default_factory=lambda: dict.fromkeys(PHASES, 0.0))
+    cpu: dict = field(default_factory=lambda: dict.fromkeys(PHASES, 0.0))
 
-    def add(self, phase: str, seconds: float) -> None:
+    def add(self, phase: str, seconds: float, cpu: float = 0.0) -> None:
         self.phases[phase] += seconds
+        self.cpu[phase] += cpu
+
+    @contextlib.contextmanager
+    def measure(self, phase: str):
+        """Add the wall and CPU time of the ``with`` block to ``phase``."""
+        wall, cpu = time.perf_counter(), time.process_time()
+        try:
+            yield
+        finally:
+            self.add(phase, time.perf_counter() - wall, time.process_time() - cpu)
+
+
+PHASES = ("setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
+          "output")
 
 
 def _is_linear(jacobian: ufl.Form, u) -> bool:
@@ -60,6 +75,9 @@ class _Body:
         J = J if J is not None else ufl.derivative(F, u)
         self.u, self.V, self.bcs = u, V, list(bcs)
         self.linear = _is_linear(J, u)
+        #: linear and zero at u = 0: its residual is the product of its Jacobian with u
+        self.homogeneous = self.linear and not ufl.replace(
+            F, {u: ufl.zero(*u.ufl_shape)}).integrals()
         self.F, self.J = compat.form(F), compat.form(J)
         self.b = compat.create_vector(self.F)
         self.A = compat.create_matrix(self.J)
@@ -141,6 +159,13 @@ class BlockProblem:
         self._base = self._bulk_pattern()
         self._linear_data = {k: self._base.gather_values(k, body.jacobian_values())
                              for k, body in enumerate(self.bodies) if body.linear}
+        #: bodies whose residual dolfinx assembles (the others are K u)
+        self._assembled = [k for k, body in enumerate(self.bodies) if not body.homogeneous]
+        self._K_linear: Optional[PETSc.Mat] = None
+        if len(self._assembled) < len(self.bodies):
+            self._K_linear = self._base.create_matrix()
+            self._base.fill(self._K_linear, sum(self._linear_data[k] for k, body
+                                                in enumerate(self.bodies) if body.homogeneous))
         self._pattern: Optional[CooPattern] = None
         self._versions: Optional[list[int]] = None
         self._J: Optional[PETSc.Mat] = None
@@ -151,6 +176,11 @@ class BlockProblem:
         self._modes: Optional[PETSc.NullSpace] = None
         self.floor = 0.0
         self._spring = 0.0
+        #: checks of an iterate (collective): each returns why it is inadmissible, or None;
+        #: the residual of an inadmissible iterate is infinite (Newton fails, and cuts back)
+        self.guards: list = []
+        #: why the last evaluated iterate was inadmissible ("" if it was not)
+        self.inadmissible = ""
 
     @property
     def linear(self) -> bool:
@@ -237,22 +267,30 @@ class BlockProblem:
     def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> float:
         """``b = R(x)``: the bodies' residuals minus :attr:`f_ext` plus the contact forces
         at their last :meth:`NodeToSurface.update`, zero in constrained rows.  Also sets
-        :attr:`internal` and the round-off :attr:`floor`; returns ``|b|``."""
-        t0 = time.perf_counter()
-        self.scatter(x)
-        values = np.zeros(self.layout.n_owned * self.gdim)
-        for k, body in enumerate(self.bodies):
-            values[self.block_slice(k)] = body.residual()
-        values -= self.f_ext
-        b.setArray(values)
-        self._scale_of_bulk(x)
-        self.timers.add("bulk_assembly", time.perf_counter() - t0)
-        t0 = time.perf_counter()
-        for c in self.contacts:
-            c.add_residual(b)
-            c.add_roundoff(self._scale)
-        self._scale.assemble()
-        self.timers.add("contact_assembly", time.perf_counter() - t0)
+        :attr:`internal` and the round-off :attr:`floor`; returns ``|b|`` (infinite, ``b``
+        untouched, when a guard finds the iterate inadmissible)."""
+        with self.timers.measure("bulk_assembly"):
+            if self._assembled:
+                self.scatter(x)
+            self.inadmissible = next((r for r in (g() for g in self.guards) if r), "")
+            if self.inadmissible:
+                self.floor = 0.0
+                return np.inf
+            if self._K_linear is not None:  # the homogeneous linear bodies: K u
+                self._K_linear.mult(x, b)
+                values = b.getArray()
+            else:
+                values = np.zeros(self.layout.n_owned * self.gdim)
+            for k in self._assembled:
+                values[self.block_slice(k)] += self.bodies[k].residual()
+            values -= self.f_ext
+            b.setArray(values)
+            self._scale_of_bulk(x)
+        with self.timers.measure("contact_assembly"):
+            for c in self.contacts:
+                c.add_residual(b)
+                c.add_roundoff(self._scale)
+            self._scale.assemble()
         r = b.getArray()
         self.internal = r + self.f_ext
         rows = self.constrained_rows
@@ -307,28 +345,28 @@ class BlockProblem:
     def jacobian(self, x: PETSc.Vec, A: Optional[PETSc.Mat] = None) -> PETSc.Mat:
         """Fill the Jacobian at ``x`` (the contacts at their last update) into ``A``
         (default :meth:`matrix`); returns it."""
-        t0 = time.perf_counter()
-        A = self.matrix() if A is None else A
-        self.scatter(x)
-        if self._bulk_data is None or not self.linear:
-            self._bulk_data = self._bulk_values()
-        base = self._bulk_data
-        self.timers.add("bulk_assembly", time.perf_counter() - t0)
-        t0 = time.perf_counter()
-        data = self._pattern.from_base(base)
-        for k, c in enumerate(self.contacts):
-            data += self._pattern.gather_values(k, c.coupling_values())
-        rows = self.constrained_rows
-        if self._bc_slots is None or not np.array_equal(self._bc_slots[0], rows):
-            self._bc_slots = (rows, self._pattern.row_slots(rows))
-        data[self._bc_slots[1]] = 0.0
-        data[self._pattern.diagonal_slots[rows]] = 1.0
-        # A force-controlled obstacle may have no stiffness along some axis (a frictionless
-        # plane in its own plane): a tiny spring in the Jacobian only keeps it regular; the
-        # residual, hence the solution, is unchanged.
-        data[self._pattern.diagonal_slots[self.free_obstacle_rows()]] += self._rigid_spring(base)
-        self._pattern.fill(A, data)
-        self.timers.add("contact_assembly", time.perf_counter() - t0)
+        with self.timers.measure("bulk_assembly"):
+            A = self.matrix() if A is None else A
+            if not self.linear:
+                self.scatter(x)
+            if self._bulk_data is None or not self.linear:
+                self._bulk_data = self._bulk_values()
+            base = self._bulk_data
+        with self.timers.measure("contact_assembly"):
+            data = self._pattern.from_base(base)
+            for k, c in enumerate(self.contacts):
+                data += self._pattern.gather_values(k, c.coupling_values())
+            rows = self.constrained_rows
+            if self._bc_slots is None or not np.array_equal(self._bc_slots[0], rows):
+                self._bc_slots = (rows, self._pattern.row_slots(rows))
+            data[self._bc_slots[1]] = 0.0
+            data[self._pattern.diagonal_slots[rows]] = 1.0
+            # A force-controlled obstacle may have no stiffness along some axis (a
+            # frictionless plane in its own plane): a tiny spring in the Jacobian only keeps
+            # it regular; the residual, hence the solution, is unchanged.
+            free = self._pattern.diagonal_slots[self.free_obstacle_rows()]
+            data[free] += self._rigid_spring(base)
+            self._pattern.fill(A, data)
         return A
 
     def _rigid_spring(self, base: np.ndarray) -> float:

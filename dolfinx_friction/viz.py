@@ -91,17 +91,16 @@ def _nodal_contact(problem, field) -> np.ndarray:
     f = compat.function(field.V)
     a = f.x.array.reshape(-1, d)
     a[:] = 0.0
-    for k, inter in enumerate(problem.interactions):
-        if problem.group_fields(problem.scene.contacts[k].slave)[0] is not field:
+    for contact in problem.scene.contacts:
+        if problem.group_fields(contact.slave)[0] is not field:
             continue
-        a[inter.slaves.local, 1] = np.maximum(a[inter.slaves.local, 1], 1.0)
-        el, res = inter.elements, inter.elements.result
-        if res is None or len(el.slave) == 0:
-            continue
-        nodes = inter.slaves.local[el.slave]
-        closed = res.status != OPEN
-        a[nodes[closed], 0] = res.F_N[closed] / inter.slaves.area[el.slave][closed]
-        a[nodes, 1] = 1.0 + res.status
+        st = problem.pair_of(contact).state()
+        a[st.nodes, 1] = np.maximum(a[st.nodes, 1], 1.0)
+        s = st.has_element
+        nodes = st.nodes[s]
+        closed = st.status[s] > OPEN
+        a[nodes[closed], 0] = st.pressure[s][closed]
+        a[nodes, 1] = 1.0 + st.status[s]
     n = field.n_owned
     a[n:] = 0.0
     compat.scatter_forward(f)
@@ -125,7 +124,7 @@ def _pad3(x: np.ndarray) -> np.ndarray:
 def _local_pieces(problem, warp: float, amplify: str) -> dict:
     """Everything this rank contributes to the picture, as plain arrays."""
     from mpi4py import MPI
-    problem.update_fields()
+    problem.system.scatter()
     d = problem.gdim
     bodies, slaves, masters = [], [], []
     slave_groups = {c.slave for c in problem.scene.contacts}

@@ -495,11 +495,10 @@ def _measures(family: str, case: dict, info: dict, incs: list, problem) -> dict:
         from mpi4py import MPI
         from dolfinx_friction.analytic import effective_modulus, hertz_line
         _, p0 = hertz_line(2.0 * fn[-1], 10.0, effective_modulus(E, NU, E, NU))
-        inter = problem.interactions[0]
-        el, res = inter.elements, inter.elements.result
-        p = res.F_N / inter.slaves.area[el.slave] if res is not None and len(el.slave) else []
+        state = problem.pair_of(problem.scene.contacts[0]).state()
+        p = state.pressure[state.has_element]
         out["p0_hertz"] = float(p0)
-        out["p_max"] = float(MPI.COMM_WORLD.allreduce(max(p, default=0.0), op=MPI.MAX))
+        out["p_max"] = float(MPI.COMM_WORLD.allreduce(p.max(initial=0.0), op=MPI.MAX))
     return out
 
 

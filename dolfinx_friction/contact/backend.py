@@ -55,6 +55,9 @@ def _load(required: bool) -> Optional[ModuleType]:
     """The kernels module, imported once (numba's import costs ~0.3 s)."""
     global _kernels, _import_error
     if _kernels is None and _import_error is None:
+        # numba's coloured messages init colorama, which writes a colour reset to a
+        # terminal at exit: under mpirun (ranks write to a pty) that is a stray line
+        os.environ.setdefault("NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING", "1")
         try:
             from dolfinx_friction.contact import kernels
             _kernels = kernels

@@ -7,6 +7,7 @@ import pytest
 from dolfinx_friction.api import run
 from dolfinx_friction.contact.laws import Linear
 from dolfinx_friction.model import BC, Body, ContactPair, Load, Rigid, Scene, Step
+from dolfinx_friction.postprocess import contact_state
 from tests import meshes
 
 E, NU = 1000.0, 0.3
@@ -48,13 +49,10 @@ def test_uniform_pressure_penetration(shared_dir):
         steps=(Step("load", increments=2, bcs=(BC("left", (0.0, None)),),
                     loads=(Load("top", pressure=p),)),))
     result = run(scene, write=False)
-    inter = result.problem.interactions[0]
-    r = inter.elements.result
-    comm = result.problem.comm
-    pressure = np.concatenate(comm.allgather(r.F_N / inter.slaves.area[inter.elements.slave]))
-    gaps = np.concatenate(comm.allgather(r.g_N))
+    state = contact_state(result)
+    pressure, gaps = state["pressure"], state["g_N"]
     assert len(pressure) == 9
-    assert comm.allreduce(r.F_N.sum()) == pytest.approx(p * 1.0, rel=1e-9)
+    assert state["F_N"].sum() == pytest.approx(p * 1.0, rel=1e-9)
     np.testing.assert_allclose(pressure, pressure.mean(), rtol=1e-9)
     assert pressure.mean() == pytest.approx(p / (1 + NU * (1 + NU) * p / E), rel=1e-5)
     law_p, _ = Linear(K, sigma_inf).pressure(-gaps)
