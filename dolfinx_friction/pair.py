@@ -26,6 +26,7 @@ is a pressure per length.
 """
 from __future__ import annotations
 
+import uuid
 from dataclasses import dataclass
 from typing import Optional, Sequence, Union
 
@@ -43,6 +44,8 @@ from dolfinx_friction.model import Body, ContactPair, Rigid
 from dolfinx_friction.surfaces import SlaveNodes, master_faces
 
 NO_ELEMENT = -1  #: status of a slave node without a contact element (far from the master)
+#: the attribute of a PETSc matrix that records which pairs' couplings its pattern holds
+_MATRIX_ATTR = "dolfinx_friction_couplings"
 
 
 def make_law(pair: ContactPair) -> Law:
@@ -270,7 +273,7 @@ class NodeToSurface:
         self._bc_cache: tuple = ((), np.zeros(0, np.int64))
         #: changes whenever the candidate couplings (the matrix pattern) change
         self.couplings_version = 0
-        self._matrices: dict[int, int] = {}
+        self._key = uuid.uuid4().hex  # names this pair in the matrices' attributes
 
     @property
     def obstacle_translation(self) -> np.ndarray:
@@ -460,7 +463,7 @@ class NodeToSurface:
         :func:`create_matrix` after :meth:`begin` (and again when :meth:`update`
         returned True).
         """
-        if self._matrices.get(A.handle) != self.couplings_version:
+        if (A.getAttr(_MATRIX_ATTR) or {}).get(self._key) != self.couplings_version:
             raise ContactSetupError(f"{self.name}: the matrix has no slots for the current "
                                     f"contact couplings: make it with create_matrix(...) "
                                     f"after begin() (and again when update() returns True)")
@@ -508,7 +511,9 @@ class NodeToSurface:
     def register_matrix(self, A: PETSc.Mat) -> None:
         """Declare that ``A``'s pattern holds the current couplings (done by
         :func:`create_matrix`; for a matrix preallocated some other way)."""
-        self._matrices[A.handle] = self.couplings_version
+        marks = A.getAttr(_MATRIX_ATTR) or {}
+        marks[self._key] = self.couplings_version
+        A.setAttr(_MATRIX_ATTR, marks)
 
     def _evaluated(self):
         el = self._interaction.elements
