@@ -117,7 +117,10 @@ def body_forms(field: BodyField) -> tuple[ufl.Form, Optional[ufl.Form]]:
     F, F3 = deformation_gradient(field.u, field.gdim)
     P = ufl.diff(strain_energy(field.body, F3), F)
     v = ufl.TestFunction(field.V)
-    return _thickness(field) * ufl.inner(P, ufl.grad(v)) * ufl.dx, None
+    # UFL would estimate a high degree for the rational integrand: Gauss rules of degree
+    # 2k (2 x 2 points on bilinear quadrilaterals, as CalculiX's CPE4 / C3D8)
+    dx = ufl.dx(metadata={"quadrature_degree": 2 * compat.space_degree(field.V)})
+    return _thickness(field) * ufl.inner(P, ufl.grad(v)) * dx, None
 
 
 class ContactProblem:

@@ -8,7 +8,6 @@ size carries ``p`` times the reference width.
 """
 from __future__ import annotations
 
-import numpy as np
 import pytest
 from scipy.optimize import brentq
 
