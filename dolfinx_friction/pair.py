@@ -84,10 +84,13 @@ def _vector(values, what: str) -> tuple[float, ...]:
 
 
 def _direction(values, what: str) -> tuple[float, ...]:
-    v = _vector(values, what)
-    if not np.linalg.norm(v) > 1e-12 * max(max(abs(c) for c in v), 1e-300) or not any(v):
+    """A unit vector along ``values`` (scaled first: 1e-200 components are a direction)."""
+    v = np.asarray(_vector(values, what))
+    scale = np.abs(v).max(initial=0.0)
+    if scale == 0.0:
         raise ContactSetupError(f"{what} is zero: a rigid obstacle needs a direction")
-    return v
+    v = v / scale
+    return tuple(float(c) for c in v / np.linalg.norm(v))
 
 
 def rigid_plane(point: Sequence[float], normal: Sequence[float], name: str = "plane") -> Rigid:

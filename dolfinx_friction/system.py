@@ -299,6 +299,9 @@ class BlockProblem:
         scale = self._scale.getArray(readonly=True).copy()
         scale[rows] = 0.0
         self.floor = ROUNDOFF_FLOOR * np.sqrt(self.comm.allreduce(float(scale @ scale)))
+        if not np.isfinite(self.floor):  # non-finite terms: no answer to accept
+            self.inadmissible, self.floor = "the residual's terms are not finite", 0.0
+            return np.inf
         return b.norm()
 
     def _scale_of_bulk(self, x: PETSc.Vec) -> None:

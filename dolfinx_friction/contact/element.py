@@ -30,7 +30,7 @@ from dolfinx_friction.contact import backend
 from dolfinx_friction.contact.friction import FrictionState, radial_return, tangent
 from dolfinx_friction.contact.laws import Law
 from dolfinx_friction.contact.projection import Projection, project_numpy
-from dolfinx_friction.contact.shapes import Array, FaceType, surface_vector
+from dolfinx_friction.contact.shapes import Array, FaceType, surface_vector, unit_vector
 
 OPEN, STICK, SLIP = 0, 1, 2
 STATUS_NAMES = ("open", "stick", "slip")
@@ -171,7 +171,7 @@ def rigid_kinematics_numpy(shape: str, X_slave: Array, u_slave: Array, U: Array,
     n, d = x.shape
     eye = np.eye(d)
     if shape == "plane":
-        unit = np.asarray(normal, float) / np.linalg.norm(normal)
+        unit = unit_vector(normal)
         nrm = np.broadcast_to(unit, (n, d)).copy()
         g_N = (x - (np.asarray(point, float) + U)) @ unit
         dn_slave = np.zeros((n, d, d))
@@ -179,7 +179,7 @@ def rigid_kinematics_numpy(shape: str, X_slave: Array, u_slave: Array, U: Array,
         v = x - (np.asarray(center if shape == "sphere" else point, float) + U)
         proj = eye.copy()
         if shape == "cylinder":
-            a = np.asarray(axis, float) / np.linalg.norm(axis)
+            a = unit_vector(axis)
             proj = eye - np.outer(a, a)
             v = v @ proj
         elif shape != "sphere":

@@ -36,7 +36,7 @@ from dolfinx_friction.contact.element import ContactParameters, ElementResult, K
 from dolfinx_friction.contact.friction import FrictionState
 from dolfinx_friction.contact.laws import _EXP_CAP, Exponential, Law, Linear, Tabular
 from dolfinx_friction.contact.projection import EDGE_TOL, Projection
-from dolfinx_friction.contact.shapes import Array, FaceType
+from dolfinx_friction.contact.shapes import Array, FaceType, unit_vector
 
 OPEN, STICK, SLIP = 0, 1, 2  # as in element.py
 FACE_CODES = {"L2": 0, "L3": 1, "T3": 2, "T6": 3, "Q4": 4, "Q9": 5}
@@ -662,12 +662,12 @@ def rigid_kinematics(shape: str, X_slave: Array, u_slave: Array, U: Array, *,
     eye = np.eye(d)
     unit, projector = np.zeros(d), eye
     if shape == "plane":
-        unit = np.asarray(normal, float) / np.linalg.norm(normal)
+        unit = unit_vector(normal)
         ref = point
     elif shape == "sphere":
         ref = center
     elif shape == "cylinder":
-        a = np.asarray(axis, float) / np.linalg.norm(axis)
+        a = unit_vector(axis)
         projector, ref = eye - np.outer(a, a), point
     else:
         raise ValueError(f"unknown rigid shape {shape!r}")

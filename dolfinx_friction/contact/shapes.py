@@ -228,3 +228,10 @@ def face_areas(face: FaceType, coords: Array) -> Array:
     gdim = coords.shape[-1]
     m = surface_vector(tangents.reshape(n_f * n_q, face.fdim, gdim)).reshape(n_f, n_q, gdim)
     return np.linalg.norm(m, axis=-1) @ wts
+
+
+def unit_vector(v) -> Array:
+    """``v / |v|``, scaled first so that tiny components (1e-200) still give a direction."""
+    v = np.asarray(v, dtype=float)
+    v = v / np.abs(v).max()
+    return v / np.linalg.norm(v)

@@ -112,3 +112,18 @@ def test_tension_branch_with_friction(name, state):
         record("tension: CalculiX sign-less slip tangent FD rel error (smallest)", err_ccx,
                smallest=True)
         assert err_ccx > 1e-2  # measured >= 0.40: the test does see the sign(F_N) term
+
+
+def test_a_tiny_plane_normal_is_a_direction():
+    """A plane normal with components of 1e-200 (whose norm underflows) is the same plane
+    as with components of 1, in both implementations of the element."""
+    from dolfinx_friction.contact import backend
+    from dolfinx_friction.contact.element import rigid_kinematics
+    X = np.array([[0.2, -0.01], [0.5, 0.03]])
+    u, U = np.zeros_like(X), np.zeros(2)
+    for kernels in ("numpy", "auto"):
+        with backend.use(kernels):
+            tiny = rigid_kinematics("plane", X, u, U, point=(0.0, 0.0), normal=(0.0, 1e-200))
+            unit = rigid_kinematics("plane", X, u, U, point=(0.0, 0.0), normal=(0.0, 1.0))
+        np.testing.assert_array_equal(tiny.g_N, unit.g_N)
+        np.testing.assert_array_equal(tiny.normal, unit.normal)
