@@ -5,8 +5,9 @@ The mesh and the indenter are those of ``demos/ironing.py`` (block 20 x 5, E = 1
 disk 1000 times stiffer); the block is Neo-Hookean (CalculiX's NEO HOOKE), indented by 0.75
 (15 % of its height) and dragged by 7, so that the indenter crosses 42 of the block's top
 faces.  The same scene is run with ``model = "linear"``; the chart
-``ironing_neo_hookean_forces.png`` shows both force histories of the indenter, the picture
-``ironing_neo_hookean_status.png`` the deformed block at the end (stick / slip).
+``ironing_neo_hookean_forces.png`` shows both force histories of the indenter, the pictures
+``ironing_neo_hookean_status.png`` and ``ironing_neo_hookean_von_mises.png`` the deformed
+block at the end (stick / slip on its top; coloured by von Mises stress).
 
     python demos/ironing_neo_hookean.py
     python -m dolfinx_friction run demos/ironing_neo_hookean.toml
@@ -45,6 +46,9 @@ def main(argv=None) -> None:
         return
     C.render(finite, "ironing_neo_hookean_status", scalar="status", warp=1.0,
              contact_margin=1.0, title="Neo-Hookean block ironed by a stiff die, mu = 0.3")
+    C.render(finite, "ironing_neo_hookean_von_mises", scalar="status", warp=1.0,
+             contact_margin=1.0, body_scalar="von_mises",
+             title="von Mises stress of the Neo-Hookean block, stick / slip on its top")
     if C.MPI.COMM_WORLD.rank == 0:
         plt = C.pyplot()
         fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)

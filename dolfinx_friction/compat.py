@@ -284,12 +284,18 @@ def quadrature_expression(expr, mesh, degree: int):
     return dolfinx.fem.Expression(expr, points)
 
 
-def evaluate_on_owned_cells(expression, mesh) -> np.ndarray:
-    """Values of a compiled expression on this rank's owned cells, (cells, points * size)."""
-    cells = np.arange(mesh.topology.index_map(mesh.topology.dim).size_local, dtype=np.int32)
+def evaluate_on_cells(expression, mesh, cells: np.ndarray) -> np.ndarray:
+    """Values of a compiled expression on local cells, (cells, points * size)."""
+    cells = np.asarray(cells, dtype=np.int32)
     if NEW_API:
         return np.asarray(expression.eval(mesh, cells))
     return np.asarray(expression.eval(cells))
+
+
+def evaluate_on_owned_cells(expression, mesh) -> np.ndarray:
+    """Values of a compiled expression on this rank's owned cells, (cells, points * size)."""
+    cells = np.arange(mesh.topology.index_map(mesh.topology.dim).size_local, dtype=np.int32)
+    return evaluate_on_cells(expression, mesh, cells)
 
 
 def tagged(tags, value: int) -> np.ndarray:

@@ -121,6 +121,17 @@ def _pad3(x: np.ndarray) -> np.ndarray:
     return out
 
 
+def _cell_von_mises(field) -> np.ndarray:
+    """The von Mises stress at the midpoint of every local cell (owned and ghost)."""
+    from dolfinx_friction import compat
+    from dolfinx_friction.problem import cauchy_stress, von_mises
+    mesh = field.V.mesh
+    expression = compat.quadrature_expression(von_mises(cauchy_stress(field)), mesh, 0)
+    im = mesh.topology.index_map(mesh.topology.dim)
+    cells = np.arange(im.size_local + im.num_ghosts, dtype=np.int32)
+    return compat.evaluate_on_cells(expression, mesh, cells).reshape(len(cells), -1)[:, 0]
+
+
 def _local_pieces(problem, warp: float, amplify: str) -> dict:
     """Everything this rank contributes to the picture, as plain arrays."""
     from mpi4py import MPI
@@ -143,7 +154,8 @@ def _local_pieces(problem, warp: float, amplify: str) -> dict:
             x = _pad3(field.X + warp * u)
         values = _nodal_contact(problem, field)
         bodies.append(dict(name=field.body.name, topology=np.asarray(topology),
-                           cell_types=np.asarray(cell_types), x=x))
+                           cell_types=np.asarray(cell_types), x=x,
+                           von_mises=_cell_von_mises(field)))
         for group in sorted(slave_groups):
             if field.mesh.groups.get(group) is None:
                 continue
@@ -183,7 +195,8 @@ def _merge(pieces: list[dict]) -> dict:
             xs.append(b["x"])
             offset += len(b["x"])
         merged_bodies.append(dict(name=name, topology=np.concatenate(tops),
-                                  cell_types=np.concatenate(types), x=np.concatenate(xs)))
+                                  cell_types=np.concatenate(types), x=np.concatenate(xs),
+                                  von_mises=np.concatenate([b["von_mises"] for b in parts])))
 
     def join(kind):
         groups: dict[tuple, list] = {}
@@ -271,7 +284,8 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
            title: Optional[str] = None, window_size: Optional[tuple[int, int]] = None,
            show_edges: bool = True, contact_margin: float = 0.75,
            clim: Optional[tuple[float, float]] = None,
-           view: Optional[Sequence[float]] = None) -> Optional[Path]:
+           view: Optional[Sequence[float]] = None,
+           body_scalar: Optional[str] = None) -> Optional[Path]:
     """Render the current state of a solved problem into ``png_path`` (collective).
 
     ``result_or_problem``: a :class:`~dolfinx_friction.api.RunResult` or a
@@ -289,12 +303,16 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
     fraction of its size on every side (at least a few element sizes).
     ``view``: 3D overview camera direction (from the scene towards the camera,
     z up); default isometric ``(1, 1, 1)``.  2D scenes are always seen along ``-z``.
+    ``body_scalar="von_mises"`` colours the bodies by their von Mises stress (per cell)
+    instead of one colour each.
     Returns the path on rank 0, ``None`` on the other ranks.
     """
     if amplify not in ("total", "deformation"):
         raise ValueError(f"amplify must be 'total' or 'deformation', not {amplify!r}")
     if scalar not in ("contact_pressure", "status"):
         raise ValueError(f"scalar must be 'contact_pressure' or 'status', not {scalar!r}")
+    if body_scalar not in (None, "von_mises"):
+        raise ValueError(f"body_scalar must be None or 'von_mises', not {body_scalar!r}")
     problem = _problem_of(result_or_problem)
     comm = problem.comm
     pieces = comm.gather(_local_pieces(problem, warp, amplify), root=0)
@@ -348,9 +366,21 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
             if close_up and gdim == 3:
                 continue
             grid = pyvista.UnstructuredGrid(b["topology"], b["cell_types"], b["x"])
-            pl.add_mesh(grid, color=BODY_COLORS[k % len(BODY_COLORS)], show_edges=show_edges,
-                        edge_color="#7f7f7f", line_width=0.5, smooth_shading=False,
-                        opacity=1.0 if (gdim == 2 or b["name"] in slave_bodies) else 0.55)
+            colour = dict(color=BODY_COLORS[k % len(BODY_COLORS)])
+            if body_scalar == "von_mises":
+                grid.cell_data["von Mises stress"] = b["von_mises"]
+                vm_max = max(float(np.percentile(c["von_mises"], 99)) for c in data["bodies"]
+                             if c["name"] in slave_bodies) if slave_bodies else None
+                colour = dict(scalars="von Mises stress", cmap="viridis",
+                              clim=(0.0, vm_max) if vm_max else None,
+                              show_scalar_bar=k == 0 and col == 0,
+                              scalar_bar_args=dict(title="von Mises stress", fmt="%.3g",
+                                                   position_x=0.05, position_y=0.05,
+                                                   width=0.35, height=0.06))
+            pl.add_mesh(grid, show_edges=show_edges, edge_color="#7f7f7f", line_width=0.5,
+                        smooth_shading=False,
+                        opacity=1.0 if (gdim == 2 or b["name"] in slave_bodies) else 0.55,
+                        **colour)
         # rigid obstacles
         for r in data["rigids"]:
             shape = _rigid_shape(r["rigid"], r["U"], gdim, bounds, centre)
