@@ -1,6 +1,6 @@
 """Reproducer: Newton 'fails' on iterates that have converged to round-off.
 
-Fixed in a68a938 (round-off floor ``solver.ROUNDOFF_FLOOR`` times |K_bulk| |u| + |f_ext| +
+Fixed in a68a938 (round-off floor ``system.ROUNDOFF_FLOOR`` times |K_bulk| |u| + |f_ext| +
 the contact terms; pinned by ``test_soft_penalty_converges_at_roundoff``).  Now every
 increment converges, most at 3e-9 .. 1e-8, above what rtol and atol ask (1e-10) and below
 the floor, which this script prints.  What follows describes the solver before that commit.
@@ -35,19 +35,18 @@ from dolfinx_friction.solver import ConvergenceError, Solver  # noqa: E402
 scene, _ = _scenes.block3d_scene({"k": 0.01, "increments": 10})
 problem = ContactProblem(scene)
 solver = Solver(problem)
-newton = solver._newton
 
 
-def traced(step, loading, tau):
-    ok, its, residuals = newton(step, loading, tau)
-    print(f"t = {tau:.4f} converged = {ok}: residuals {' '.join(f'{r:.1e}' for r in residuals[:6])}"
-          f"{' ...' if len(residuals) > 6 else ''} (tolerances ask {max(step.newton_rtol * residuals[0], step.newton_atol):.1e}, "
-          f"round-off floor {solver._floor:.1e})")
-    return ok, its, residuals
+def show(inc):
+    r = inc.residuals
+    step = scene.steps[inc.step]
+    print(f"t = {inc.t:.4f}: residuals {' '.join(f'{x:.1e}' for x in r[:6])}"
+          f"{' ...' if len(r) > 6 else ''} (tolerances ask "
+          f"{max(step.newton_rtol * r[0], step.newton_atol):.1e}, round-off floor "
+          f"{problem.system.floor:.1e})")
 
 
-solver._newton = traced
 try:
-    solver.run()
+    solver.run(show)
 except ConvergenceError as exc:
     print("ConvergenceError:", exc)
