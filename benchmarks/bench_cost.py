@@ -103,7 +103,8 @@ def factor_stats(n: int, contact: bool) -> dict:
     s = result.solver
     F = s.linear.ksp.getPC().getFactorMatrix()
     return {"n": n, "contact": contact, "dofs": num["dofs"],
-            "nnz": int(s._J.getInfo()["nz_used"]), "factor_entries": int(F.getMumpsInfog(20)),
+            "nnz": int(result.problem.system.matrix().getInfo()["nz_used"]),
+            "factor_entries": int(F.getMumpsInfog(20)),
             "flops": float(F.getMumpsRinfog(3)), "ordering": int(F.getMumpsInfog(7)),
             "solve_per_it": num["phases"]["linear_solve"] / max(num["newton"], 1)}
 
