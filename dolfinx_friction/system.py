@@ -155,6 +155,7 @@ class BlockProblem:
         self._bc_rows = self._dolfinx_bc_rows()
         self._prescribed_rows = np.zeros(0, dtype=np.int64)
         self._prescribed_values = np.zeros(0)
+        self._constrained = self._bc_rows
         self.gather()
         self._base = self._bulk_pattern()
         self._linear_data = {k: self._base.gather_values(k, body.jacobian_values())
@@ -224,15 +225,16 @@ class BlockProblem:
     def prescribe(self, rows: np.ndarray, values: np.ndarray) -> None:
         """Constrain owned rows (local indices of :attr:`x`) to values, besides the
         dolfinx bcs; :meth:`apply_bcs` writes them into :attr:`x`."""
-        self._prescribed_rows = np.asarray(rows, dtype=np.int64)
+        rows = np.asarray(rows, dtype=np.int64)
+        if not np.array_equal(rows, self._prescribed_rows):
+            self._prescribed_rows = rows
+            self._constrained = np.union1d(self._bc_rows, rows)
         self._prescribed_values = np.asarray(values, dtype=float)
 
     @property
     def constrained_rows(self) -> np.ndarray:
-        """Local rows of :attr:`x` held by the bcs and :meth:`prescribe`."""
-        if not len(self._prescribed_rows):
-            return self._bc_rows
-        return np.union1d(self._bc_rows, self._prescribed_rows)
+        """Local rows of :attr:`x` held by the bcs and :meth:`prescribe` (sorted)."""
+        return self._constrained
 
     def apply_bcs(self) -> None:
         """Write the current values of the Dirichlet conditions into :attr:`x`."""
@@ -360,7 +362,7 @@ class BlockProblem:
             for k, c in enumerate(self.contacts):
                 data += self._pattern.gather_values(k, c.coupling_values())
             rows = self.constrained_rows
-            if self._bc_slots is None or not np.array_equal(self._bc_slots[0], rows):
+            if self._bc_slots is None or self._bc_slots[0] is not rows:
                 self._bc_slots = (rows, self._pattern.row_slots(rows))
             data[self._bc_slots[1]] = 0.0
             data[self._pattern.diagonal_slots[rows]] = 1.0
