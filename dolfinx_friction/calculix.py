@@ -8,7 +8,17 @@ that models the same problem as dolfinx_friction:
   gets its own copy of its nodes, so bodies never share nodes (as in
   :mod:`dolfinx_friction.gmsh_io`); first-order hexahedra become ``C3D8``
   and tetrahedra ``C3D4``;
-* one element set, material and ``*SOLID SECTION`` per body;
+* one element set, material and ``*SOLID SECTION`` per body: ``*ELASTIC`` with
+  E and nu for ``model = "linear"`` and ``"saint-venant-kirchhoff"``,
+  ``*HYPERELASTIC, NEO HOOKE`` with ``C10 = mu/2``, ``D1 = 2/kappa`` for
+  ``"neo-hookean"``;
+* finite strain: if any body has a finite-strain model, every ``*STEP`` is
+  ``NLGEOM`` (Green-Lagrange strain and second Piola-Kirchhoff stress with
+  ``*ELASTIC``: Saint Venant-Kirchhoff).  CalculiX applies NLGEOM to the whole
+  model, so a ``"linear"`` body of such a scene is Saint Venant-Kirchhoff in
+  the deck (the deck says so in a comment); for a stiff linear body (a
+  foundation, a die) the two differ by its squared strains only.  A scene
+  without finite-strain bodies is written as before, without NLGEOM;
 * a node set for every group that carries a bc or a reaction, made of the
   group's nodes in every body that contains all of them;
 * an element-face surface (``TYPE=ELEMENT``) for the slave and the master
@@ -39,7 +49,8 @@ that models the same problem as dolfinx_friction:
 
 Where the two codes still differ (reference vs. deformed ``A_p``, pairing near
 master face edges) is measured and explained in
-``tests/verification/test_calculix.py``.
+``tests/verification/test_calculix.py``; at finite strain (NLGEOM, Neo-Hookean
+bodies) in ``tests/verification/test_calculix_nlgeom.py``.
 
 :func:`run_ccx` runs ``ccx`` on a deck and returns the reaction sums per step
 and increment.  Rigid obstacles, 2D meshes and second-order elements are not
@@ -60,7 +71,7 @@ from typing import Any, Optional, Sequence, Union
 import numpy as np
 
 from dolfinx_friction.gmsh_io import gmsh_file, group_elements
-from dolfinx_friction.model import ContactPair, Scene
+from dolfinx_friction.model import MODELS, Body, ContactPair, Scene
 
 __all__ = ["CCX_FACES", "CcxError", "CcxRun", "ccx_available", "ccx_executable", "parse_dat",
            "read_mesh", "run_ccx", "write_inp", "DEFAULT_FIELD_CONTROLS"]
@@ -330,6 +341,20 @@ def _interaction_lines(name: str, pair: ContactPair) -> list[str]:
     return lines
 
 
+def _material_lines(body: Body) -> list[str]:
+    """The material cards of a body: ``*ELASTIC`` (linear and Saint Venant-Kirchhoff: the
+    latter is what CalculiX does with ``*ELASTIC`` in an NLGEOM step) or ``*HYPERELASTIC,
+    NEO HOOKE`` with ``C10 = mu/2``, ``D1 = 2/kappa`` (as :func:`problem.strain_energy`)."""
+    if body.model == "neo-hookean":
+        if not body.nu < 0.5:
+            raise ValueError(f"body {body.name!r}: nu = {body.nu} >= 0.5 for the compressible "
+                             "Neo-Hookean model")
+        mu = body.E / (2.0 * (1.0 + body.nu))
+        kappa = body.E / (3.0 * (1.0 - 2.0 * body.nu))
+        return ["*HYPERELASTIC, NEO HOOKE", f"{_num(0.5 * mu)}, {_num(2.0 / kappa)}"]
+    return ["*ELASTIC", f"{_num(body.E)}, {_num(body.nu)}"]
+
+
 def write_inp(scene: Scene, path: Union[str, Path], *,
               field_controls: Optional[Sequence[Optional[float]]] = DEFAULT_FIELD_CONTROLS,
               time_controls: Optional[Sequence[Optional[float]]] = None,
@@ -345,6 +370,11 @@ def write_inp(scene: Scene, path: Union[str, Path], *,
     prescribed) and :class:`ValueError` for groups the mesh does not have.
     """
     path = Path(path)
+    for b in scene.bodies:
+        if b.model not in MODELS:
+            raise ValueError(f"body {b.name!r}: unknown model {b.model!r} (one of "
+                             f"{', '.join(MODELS)})")
+    nlgeom = any(b.finite_strain for b in scene.bodies)
     if scene.rigids:
         raise NotImplementedError("rigid obstacles ([[rigid]]) are not exported to CalculiX; "
                                   "mesh the obstacle as a body instead")
@@ -361,6 +391,11 @@ def write_inp(scene: Scene, path: Union[str, Path], *,
     ]
     if scene.title:
         out.append(f"** title: {scene.title}")
+    if nlgeom:
+        linear = [b.name for b in scene.bodies if not b.finite_strain]
+        out.append("** finite strain: every *STEP is NLGEOM" + (
+            f"; CalculiX treats the linear bodies ({', '.join(linear)}) as Saint Venant-"
+            "Kirchhoff there" if linear else ""))
 
     # ---- nodes and elements
     out.append("*NODE, NSET=NALL")
@@ -383,7 +418,7 @@ def write_inp(scene: Scene, path: Union[str, Path], *,
 
     # ---- materials and sections
     for b in scene.bodies:
-        out += [f"*MATERIAL, NAME={name('M', b.name)}", "*ELASTIC", f"{_num(b.E)}, {_num(b.nu)}",
+        out += [f"*MATERIAL, NAME={name('M', b.name)}", *_material_lines(b),
                 f"*SOLID SECTION, ELSET={name('E', b.name)}, MATERIAL={name('M', b.name)}"]
 
     # ---- contact
@@ -427,7 +462,7 @@ def write_inp(scene: Scene, path: Union[str, Path], *,
         load_state.update({ld.on: (ld.traction, ld.pressure) for ld in step.loads})
         n_inc = step.increments
         out += [f"** step {i}: {step.name}",
-                f"*STEP, INC={max(100, 10 * n_inc)}",
+                f"*STEP{', NLGEOM' if nlgeom else ''}, INC={max(100, 10 * n_inc)}",
                 "*STATIC, DIRECT",
                 f"{_num(1.0 / n_inc)}, 1.0"]
         if field_controls is not None:
