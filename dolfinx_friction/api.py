@@ -9,6 +9,7 @@ from typing import Optional, Sequence, Union
 
 from mpi4py import MPI
 
+from dolfinx_friction.errors import interruption
 from dolfinx_friction.model import Scene
 from dolfinx_friction.output import ResultWriter
 from dolfinx_friction.problem import ContactProblem
@@ -56,6 +57,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     if write:
         writer = ResultWriter(problem, solver.reaction_groups(), directory, scene.output.fields,
                               scene.output.contact_table, quiet)
+        interruption.directory = directory  # named by the line of an interrupted run
     solver.timers.add("setup", time.perf_counter() - start, time.process_time() - cpu)
     increments: list[Increment] = []
     warnings: dict[str, str] = {}
@@ -67,6 +69,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
                 print(f"dolfinx-friction: warning: {text}", file=sys.stderr)
 
     def record(inc: Increment) -> None:
+        # an increment that converges after a signal was announced naming it is not kept
+        interruption.checkpoint(comm)
         increments.append(inc)
         for pair, ratio in inc.penetration.items():
             if ratio > PENETRATION_WARNING:
@@ -77,17 +81,35 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
                 warn(pair + " detached", f"contact {pair}: {count} slave node(s) in contact slid "
                                          f"off the master surface at t = {inc.t:.4g}")
         if writer is not None:
-            with solver.timers.measure("output"):
-                writer.increment(inc)
+            # a signal waits while the increment is written (whole or not at all), then
+            # stops every rank here, all together
+            interruption.writing = True
+            try:
+                with solver.timers.measure("output"):
+                    writer.increment(inc)
+            finally:
+                interruption.writing = False
+            # what a signal now interrupts: the next increment (of the next step at t = 1)
+            interruption.where = ((inc.step + 1, 1) if inc.t - inc.step > 1.0 - 1e-12
+                                  else (inc.step, inc.increment + 1))
+            interruption.checkpoint(comm)
 
     try:
         summary = solver.run(record)
     except ConvergenceError:
         solver.summary.wall = time.perf_counter() - start
         if writer is not None:
-            writer.summary(solver.summary, {"warnings": list(warnings.values())})
+            interruption.writing = True  # (a signal now: the failure is still reported)
+            try:
+                writer.summary(solver.summary, {"warnings": list(warnings.values())})
+            finally:
+                interruption.writing = False
         raise
     summary.wall = time.perf_counter() - start
     if writer is not None:
-        writer.summary(summary, {"warnings": list(warnings.values())})
+        interruption.writing = True  # all converged: a signal now only changes the exit status
+        try:
+            writer.summary(summary, {"warnings": list(warnings.values())})
+        finally:
+            interruption.writing = False
     return RunResult(problem, summary, increments, directory if write else None)

@@ -1,15 +1,19 @@
 """``dolfinx-friction run|check``: the command line of scene-format.md."""
 from __future__ import annotations
 
+import _thread
 import argparse
 import logging
 import os
+import signal
 import sys
+import threading
 import warnings
 from pathlib import Path
 from typing import Optional, Sequence
 
-from dolfinx_friction.errors import EXIT_INPUT, EXIT_INTERNAL, OutputError, classify
+from dolfinx_friction.errors import (EXIT_INPUT, EXIT_INTERNAL, EXIT_SIGNAL, Interrupted,
+                                     OutputError, classify, interruption)
 from dolfinx_friction.inputs import file_fault
 from dolfinx_friction.scene import SceneError, default_output_dir, load_scene
 
@@ -120,9 +124,52 @@ def _quiet_libraries(debug: bool) -> None:
     root.addHandler(handler)
 
 
+def _on_signal(signum: int, frame) -> None:
+    """SIGINT / SIGTERM: one line (rank 0), then stop where it is safe (see
+    :class:`~dolfinx_friction.errors.Interruption`); exit 130 / 143."""
+    state = interruption
+    if state.signum is not None:  # already stopping (a second Ctrl-C, or SIGTERM after it)
+        return
+    state.signum = signum
+    if state.writing:  # the increment being written is complete in a moment: the checkpoint
+        return         # right after it names the next one
+    state.announce()
+    if not state.solving:
+        raise Interrupted(signum)
+
+
+def _watch_signals(signals: set) -> None:
+    """A thread that takes SIGINT / SIGTERM (blocked in every other thread), prints the line
+    at once and hands the signal to the main thread's handler.
+
+    Python runs a signal handler in the main thread only between bytecodes: not while the
+    main thread waits in MPI, fsync or HDF5.  Under ``mpirun`` that is too late: Open MPI
+    sends the ranks SIGTERM and kills them one second later (``odls_base_sigkill_timeout``).
+    This thread needs only the GIL, which such waits release."""
+    while True:
+        signum = signal.sigwait(signals)
+        if interruption.signum is None and not interruption.writing:
+            interruption.announce()
+        _thread.interrupt_main(signum)  # runs _on_signal in the main thread
+
+
+def _install_signal_handlers() -> None:
+    if interruption.armed or threading.current_thread() is not threading.main_thread():
+        return  # done already, or main() called from a thread (signals are the caller's)
+    interruption.armed = True
+    interruption.rank = _rank()  # before MPI starts: from the launcher's environment
+    signals = {signal.SIGINT, signal.SIGTERM}
+    for signum in signals:
+        signal.signal(signum, _on_signal)
+    signal.pthread_sigmask(signal.SIG_BLOCK, signals)  # inherited by threads started later
+    threading.Thread(target=_watch_signals, args=(signals,), daemon=True,
+                     name="dolfinx-friction-signals").start()
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     args = _parser().parse_args(argv)
     _quiet_libraries(args.debug)
+    _install_signal_handlers()
     try:
         reason = file_fault(args.scene)
         if reason is not None:
@@ -133,6 +180,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         scene = load_scene(args.scene, args.overrides)
         _precheck(args, scene)
         _run(args, scene) if args.command == "run" else _check(args, scene)
+    except Interrupted as exc:  # the line was printed when the signal came
+        return EXIT_SIGNAL.get(exc.signum, 128 + exc.signum)
     except Exception as exc:  # one line on stderr (rank 0), a traceback only with --debug
         if args.debug:
             raise
@@ -144,6 +193,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if _rank() == 0:
             print(f"dolfinx-friction: error: {message}", file=sys.stderr, flush=True)
         return status
+    if interruption.announced:  # a signal came after the last checkpoint: say what was said
+        return EXIT_SIGNAL.get(interruption.signum, 128 + interruption.signum)
     return 0
 
 

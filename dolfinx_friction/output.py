@@ -24,9 +24,17 @@ in this order: the rows of ``contact.csv``, the field folder
   short);
 * ``summary.json`` is written (atomically) only when the solve ends: all steps
   converged, or an increment diverged after all its cutbacks.
+
+A write that fails (a full disk) is reported as one :class:`OutputError` naming the
+file, raised on every rank, and leaves the tables as they were before the increment:
+a table is cut back to its former length, this increment's ``contact.csv`` rows are
+removed when a later part of it fails, and its scratch folder is deleted.  Field folders
+are not started when the free space is below twice the last one's size: under MPI,
+dolfinx aborts the process when HDF5 fails to close a file on a full disk.
 """
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
@@ -48,24 +56,84 @@ OUR_FILES = ("history.csv", "contact.csv", "summary.json")
 AXES = "xyz"
 
 
+def _fault(path: Path, exc: BaseException) -> str:
+    """The one line for a file that could not be written (a full disk said as such)."""
+    if getattr(exc, "strerror", None):
+        return f"{path}: cannot be written: {exc.strerror}"
+    reason = " ".join(str(exc).split()).rstrip(".")
+    try:  # HDF5 says only "failed to write": tell a full disk as such
+        folder = next(p for p in (path, *path.parents) if p.exists())
+        st = os.statvfs(folder)
+        if st.f_bavail * st.f_frsize < 1 << 20:
+            reason = (f"{os.strerror(errno.ENOSPC)} ({reason}; "
+                      f"{st.f_bavail * st.f_frsize} bytes free)")
+    except (OSError, StopIteration):
+        pass
+    return f"{path}: cannot be written: {reason}"
+
+
 def _append(path: Path, text: str) -> None:
-    """Append whole lines with one ``write`` (continued should it be short), then fsync."""
+    """Append whole lines with one ``write`` (continued should it be short), then fsync.
+    A write that fails (a full disk) is undone: the file is cut back to its former
+    length, so that no partial line is left (truncating frees space, it needs none)."""
     data = memoryview(text.encode())
     fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
     try:
-        while data:
-            data = data[os.write(fd, data):]
-        os.fsync(fd)
+        size = os.fstat(fd).st_size
+        try:
+            while data:
+                data = data[os.write(fd, data):]
+            os.fsync(fd)
+        except OSError:
+            os.ftruncate(fd, size)
+            raise
     finally:
         os.close(fd)
 
 
+def _truncate(path: Path, size: int) -> None:
+    with open(path, "rb+") as f:
+        f.truncate(size)
+        os.fsync(f.fileno())
+
+
 def _write_atomic(path: Path, text: str) -> None:
     tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    with open(tmp, "rb+") as f:
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(text)
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except OSError:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _collective(comm, error: Optional[str], reduce: bool = False) -> None:
+    """Raise :class:`OutputError` on every rank when one rank (rank 0, or any rank when
+    ``reduce``) failed to write: the others must not go on to the next collective."""
+    errors = comm.allgather(error) if reduce else [comm.bcast(error, root=0)]
+    error = next((e for e in errors if e), None)
+    if error:
+        raise OutputError(error)
+
+
+def _silence_hdf5() -> None:
+    """Turn off HDF5's automatic error-stack printing (dozens of HDF5-DIAG lines on
+    stderr for one failed write, e.g. on a full disk): the failure still raises in
+    dolfinx, and is reported in one line.  The library is the one dolfinx loaded."""
+    try:
+        import ctypes
+        with open("/proc/self/maps") as maps:
+            paths = {line.split()[-1] for line in maps if "/libhdf5" in line}
+        for path in paths:
+            if os.path.basename(path).startswith(("libhdf5.so", "libhdf5_openmpi.so",
+                                                  "libhdf5_mpich.so", "libhdf5_serial.so")):
+                lib = ctypes.CDLL(path)
+                lib.H5Eset_auto2.argtypes = [ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p]
+                lib.H5Eset_auto2(0, None, None)  # H5E_DEFAULT
+    except (OSError, AttributeError):
+        pass  # no /proc, or another HDF5 build: its messages stay
 
 
 def _fmt(values) -> str:
@@ -94,13 +162,20 @@ class ResultWriter:
         ids = {name: self._canonical_ids(pair.state().X) for name, pair in problem.pairs.items()}
         offsets = np.cumsum([0] + [self.comm.allreduce(len(i)) for i in ids.values()])
         self._node_ids = {name: i + off for (name, i), off in zip(ids.items(), offsets)}
+        error = None
         if self.rank0:
-            _append(self.dir / "history.csv", ",".join(self.history_header) + "\n")
-            if contact_table:
-                cols = (["step", "increment", "node"] + list(AXES[:d]) +
-                        ["gap", "pressure", "normal_force"] +
-                        [f"tangential_force_{a}" for a in AXES[:d]] + ["slip", "status"])
-                _append(self.dir / "contact.csv", ",".join(cols) + "\n")
+            path = self.dir / "history.csv"
+            try:
+                _append(path, ",".join(self.history_header) + "\n")
+                if contact_table:
+                    path = self.dir / "contact.csv"
+                    cols = (["step", "increment", "node"] + list(AXES[:d]) +
+                            ["gap", "pressure", "normal_force"] +
+                            [f"tangential_force_{a}" for a in AXES[:d]] + ["slip", "status"])
+                    _append(path, ",".join(cols) + "\n")
+            except OSError as exc:
+                error = _fault(path, exc)
+        _collective(self.comm, error)
         if fields:
             self._field_writer = FieldWriter(problem, self.dir / "fields")
 
@@ -145,11 +220,26 @@ class ResultWriter:
 
     # ------------------------------------------------------------ per increment
     def increment(self, inc: Increment) -> None:
-        d = self.problem.gdim
-        if self.contact_table:
-            self._contact_rows(inc)
-        if self.fields:
-            self._field_writer.write(inc)
+        """Write one converged increment: all of it, or (a write failed: a full disk)
+        nothing; then :class:`OutputError` names the file, on every rank."""
+        contact = self.dir / "contact.csv"
+        size = contact.stat().st_size if self.rank0 and self.contact_table else 0
+        try:
+            if self.contact_table:
+                self._contact_rows(inc)
+            if self.fields:
+                self._field_writer.write(inc)
+            self._history_row(inc)
+        except OutputError:
+            if self.rank0 and self.contact_table:  # the rows of this increment go too
+                try:
+                    _truncate(contact, size)
+                except OSError:
+                    pass
+            raise
+
+    def _history_row(self, inc: Increment) -> None:
+        d, error = self.problem.gdim, None
         if self.rank0:
             row = [inc.step, inc.increment, float(inc.t), inc.iterations, float(inc.residual),
                    inc.active, inc.slipping, float(inc.wall)]
@@ -158,7 +248,12 @@ class ResultWriter:
             for r in self.problem.scene.rigids:
                 row += [float(v) for v in inc.rigid_u[r.name]]
                 row += [float(v) for v in inc.rigid_f[r.name]]
-            _append(self.dir / "history.csv", _fmt(row) + "\n")
+            try:
+                _append(self.dir / "history.csv", _fmt(row) + "\n")
+            except OSError as exc:
+                error = _fault(self.dir / "history.csv", exc)
+        _collective(self.comm, error)
+        if self.rank0:
             if not self.quiet:
                 print(f"step {inc.step} ({inc.step_name}) increment {inc.increment}: "
                       f"t = {inc.t:.4f}, {inc.iterations} Newton iterations, residual "
@@ -176,9 +271,15 @@ class ResultWriter:
         width = 3 + 3 * self.problem.gdim + 3
         local = np.concatenate(blocks) if blocks else np.zeros((0, width))
         rows = self.comm.gather(local, root=0)
-        if not self.rank0:
-            return
-        table = np.concatenate(rows)
+        error = None
+        if self.rank0:
+            try:
+                self._append_contact(inc, np.concatenate(rows))
+            except OSError as exc:
+                error = _fault(self.dir / "contact.csv", exc)
+        _collective(self.comm, error)
+
+    def _append_contact(self, inc: Increment, table: np.ndarray) -> None:
         table = table[np.argsort(table[:, 0], kind="stable")]
         lines = []
         for row in table:
@@ -188,11 +289,15 @@ class ResultWriter:
 
     # ---------------------------------------------------------------- summary
     def summary(self, run: RunSummary, extra: Optional[dict] = None) -> None:
+        _collective(self.comm, self._write_summary(run, extra))
+
+    def _write_summary(self, run: RunSummary, extra: Optional[dict]) -> Optional[str]:
+        """summary.json (rank 0); why it could not be written, or None."""
         p = self.problem
         n_dofs = p.layout.n_global * p.gdim
         slaves = self.comm.allreduce(sum(len(pair.state().nodes) for pair in p.pairs.values()))
         if not self.rank0:
-            return
+            return None
         scene = p.scene
         source = scene.source
         data = {
@@ -214,7 +319,11 @@ class ResultWriter:
             "failure": run.failure or None,
         }
         data.update(extra or {})
-        _write_atomic(self.dir / "summary.json", json.dumps(data, indent=2) + "\n")
+        try:
+            _write_atomic(self.dir / "summary.json", json.dumps(data, indent=2) + "\n")
+        except OSError as exc:
+            return _fault(self.dir / "summary.json", exc)
+        return None
 
 
 class FieldWriter:
@@ -222,8 +331,15 @@ class FieldWriter:
 
     def __init__(self, problem: ContactProblem, directory: Path):
         self.problem, self.dir = problem, directory
+        error = None
         if problem.comm.rank == 0:
-            directory.mkdir(parents=True, exist_ok=True)
+            try:
+                directory.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                error = _fault(directory, exc)
+        _collective(problem.comm, error)
+        _silence_hdf5()
+        self._size = 0  # bytes of the last increment's field folder
         self.outputs = [compat.output_spaces(f) for f in problem.fields]
 
     def _contact_fields(self, field) -> dict[str, np.ndarray]:
@@ -255,14 +371,49 @@ class FieldWriter:
         comm = self.problem.comm
         name = f"step{inc.step}_increment{inc.increment:04d}"
         scratch = self.dir / f".{name}.partial"
+        error = None
         if comm.rank == 0:
             shutil.rmtree(scratch, ignore_errors=True)
-            scratch.mkdir()
-        comm.barrier()
+            error = self._space_for(self.dir / name)
+            try:
+                error or scratch.mkdir()
+            except OSError as exc:
+                error = _fault(self.dir / name, exc)
+        _collective(comm, error)
         self.problem.system.scatter()
         for field, spaces in zip(self.problem.fields, self.outputs):
-            compat.write_fields(scratch / f"{field.body.name}.xdmf", field, spaces,
-                                self._contact_fields(field), inc.t, self._stresses(field))
-        comm.barrier()
+            path = scratch / f"{field.body.name}.xdmf"
+            try:  # HDF5 writes collectively: every rank sees the failure
+                compat.write_fields(path, field, spaces, self._contact_fields(field), inc.t,
+                                    self._stresses(field))
+            except (RuntimeError, OSError) as exc:
+                error = _fault(self.dir / name / path.name, exc)
+            if comm.allreduce(error is not None):  # (any rank: the others must stop too)
+                break
+        try:
+            _collective(comm, error, reduce=True)
+        except OutputError:
+            if comm.rank == 0:  # never a result; removing it gives the space back
+                shutil.rmtree(scratch, ignore_errors=True)
+            raise
         if comm.rank == 0:
-            os.replace(scratch, self.dir / name)
+            try:
+                os.replace(scratch, self.dir / name)
+                self._size = sum(f.stat().st_size for f in (self.dir / name).iterdir())
+            except OSError as exc:
+                error = _fault(self.dir / name, exc)
+        _collective(comm, error)
+
+    def _space_for(self, folder: Path) -> Optional[str]:
+        """Why the next field folder would not fit (or None): free space below twice the
+        last folder's size.  Checked before writing, because HDF5 does not fail cleanly on
+        a full disk: under MPI, dolfinx's XDMFFile then aborts the process as it closes."""
+        try:
+            st = os.statvfs(self.dir)
+        except OSError:
+            return None
+        free = st.f_bavail * st.f_frsize
+        if free >= 2 * self._size + (64 << 10):
+            return None
+        return (f"{folder}: cannot be written: {os.strerror(errno.ENOSPC)} ({free} bytes free; "
+                f"the last increment's fields took {self._size})")

@@ -15,6 +15,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from dolfinx_friction import stepping
+from dolfinx_friction.errors import interruption
 from dolfinx_friction.newton import Newton
 from dolfinx_friction.problem import ContactProblem, ModelError
 from dolfinx_friction.stepping import IncrementRecord
@@ -194,6 +195,20 @@ class Solver:
 
     # -------------------------------------------------------------- run
     def run(self, on_increment: Optional[Callable[[Increment], None]] = None) -> RunSummary:
+        # SIGINT/SIGTERM (command line only): every residual evaluation is a collective
+        # checkpoint where all ranks stop together (errors.Interruption); first in the
+        # guards, so that it is reached whatever the other guards find
+        def checkpoint() -> None:
+            interruption.checkpoint(self.comm)
+        self.system.guards.insert(0, checkpoint)
+        interruption.solving = True
+        try:
+            return self._run(on_increment)
+        finally:
+            interruption.solving = False
+            self.system.guards.remove(checkpoint)
+
+    def _run(self, on_increment: Optional[Callable[[Increment], None]]) -> RunSummary:
         summary = self.summary
         start = time.perf_counter()
         for index, step in enumerate(self.problem.scene.steps):
@@ -201,17 +216,21 @@ class Solver:
             newton = self.newton
             newton.rtol, newton.atol = step.newton_rtol, step.newton_atol
             newton.max_iterations, newton.line_search = step.max_iterations, step.line_search
+            done = [0]  # converged increments of this step
 
-            def load(tau: float, loading=loading) -> None:
+            def load(tau: float, loading=loading, index=index, done=done) -> None:
+                interruption.where = (index, done[0] + 1)  # named if a signal stops the run
                 values, self.system.f_ext = loading.at(tau)
                 self.system.prescribe(loading.rows, values)
                 for pair in self.problem.pairs.values():
                     pair.ramp = (1.0 - tau) if loading.first else 0.0
 
-            def converged(record: IncrementRecord, index=index, name=step.name) -> None:
+            def converged(record: IncrementRecord, index=index, name=step.name,
+                          done=done) -> None:
                 summary.increments += 1
                 summary.cutbacks += record.cutbacks
                 summary.newton_iterations += record.work
+                done[0] = record.number
                 report = self._report(index, name, record, time.perf_counter() - start)
                 if on_increment is not None:
                     on_increment(report)

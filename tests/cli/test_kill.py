@@ -1,4 +1,5 @@
-"""A run killed with SIGKILL leaves the increments already written complete and readable.
+"""A run killed with SIGKILL leaves the increments already written complete and readable;
+one stopped by SIGINT / SIGTERM, or by a full disk, says so in one line.
 
 The guarantee (documented in ``dolfinx_friction/output.py``): per increment the
 rows of ``contact.csv`` are written first, then the field folder, then the row
@@ -13,13 +14,22 @@ of ``history.csv``.  After a kill
   be left and is not a result;
 * ``summary.json`` is not written (the run did not end).
 
-Serial only: the run is a subprocess started from a serial pytest.
+SIGINT / SIGTERM (serially and under ``mpirun -n 2``, where Open MPI turns either into
+SIGTERM for the ranks and kills them a second later): exactly one line on stderr,
+"interrupted at step k, increment n; the results of converged increments are in DIR",
+naming the increment after the last one written, exit 130 / 143 (serial), the same
+complete tables and no summary.  A full disk (a small tmpfs, mounted if we are root):
+one line naming the file, exit 2, the tables cut back to whole increments that match
+(no partial row, no increment's rows without its history row).
+
+Serial only: the runs are subprocesses started from a serial pytest.
 """
 from __future__ import annotations
 
 import csv
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -30,6 +40,7 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
+from dolfinx_friction import compat
 from tests import meshes
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
@@ -181,3 +192,147 @@ def test_field_folders_are_complete(killed_run):
 
 def test_no_summary_of_an_unfinished_run(killed_run):
     assert not (killed_run / "summary.json").exists()
+
+
+# ------------------------------------------------------------------ SIGINT / SIGTERM
+
+LINE = re.compile(r"dolfinx-friction: interrupted at step (\d+), increment (\d+); "
+                  r"the results of converged increments are in (.+)")
+
+
+def _command(ranks: int) -> tuple[list[str], dict[str, str]]:
+    program = [sys.executable, "-m", "dolfinx_friction", "run"]
+    if ranks == 1:
+        return program, _env()
+    return [*compat.mpirun_command(ranks), *program], compat.mpirun_environment(_env())
+
+
+def _run_until(d: Path, ranks: int, rows: int, signum: int, *args: str):
+    """Start a run, send ``signum`` once ``history.csv`` holds ``rows`` rows (to
+    ``mpirun`` itself under MPI, as Ctrl-C in a terminal would); (status, stderr, out)."""
+    out = d / "results"
+    command, env = _command(ranks)
+    proc = subprocess.Popen([*command, str(d / "scene.toml"), "--out", str(out), "--quiet",
+                             *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            env=env, text=True)
+    deadline = time.monotonic() + 240
+    try:
+        while _data_rows(out / "history.csv") < rows:
+            assert proc.poll() is None, (f"the run ended before the signal "
+                                         f"(exit {proc.returncode}): {proc.stderr.read()!r}")
+            assert time.monotonic() < deadline, "the run is too slow"
+            time.sleep(0.01)
+        os.kill(proc.pid, signum)
+        stderr = proc.stderr.read()
+        proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(timeout=60)
+        proc.stderr.close()
+    return proc.returncode, compat.mpirun_stderr(stderr), out
+
+
+def _increments(path: Path) -> list[tuple[int, int]]:
+    _, rows = _read_table(path)
+    seen: dict[tuple[int, int], None] = {}
+    for r in rows:
+        seen[(int(r[0]), int(r[1]))] = None
+    return list(seen)
+
+
+@pytest.mark.parametrize("ranks", [1, 2], ids=["serial", "2ranks"])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_signal_one_line(tmp_path, signum, ranks):
+    if ranks > 1 and shutil.which("mpirun") is None:
+        pytest.skip("mpirun not found")
+    meshes.two_boxes(tmp_path / "two.msh", n_block=(2, 2, 1), n_foundation=(3, 3, 1))
+    (tmp_path / "scene.toml").write_text(SCENE)
+    status, stderr, out = _run_until(tmp_path, ranks, 3, signum)
+    lines = stderr.splitlines()
+    assert len(lines) == 1 and "Traceback" not in stderr, stderr
+    match = LINE.fullmatch(lines[0])
+    assert match, lines[0]
+    if ranks == 1:
+        assert status == {signal.SIGINT: 130, signal.SIGTERM: 143}[signum], (status, stderr)
+    else:  # mpirun's own status (Open MPI 4: 1 once it has forwarded a signal)
+        assert status != 0, (status, stderr)
+    assert match.group(3) == str(out)
+    done = _increments(out / "history.csv")
+    assert len(done) >= 3
+    # the increment named is the one after the last written: the next of its step
+    # (or the first of the next step)
+    step, increment = int(match.group(1)), int(match.group(2))
+    last = done[-1]
+    assert (step, increment) in ((last[0], last[1] + 1), (last[0] + 1, 1)), (match, done)
+    listed = _increments(out / "contact.csv")
+    fields = sorted((int(m.group(1)), int(m.group(2))) for m in
+                    (re.fullmatch(r"step(\d+)_increment(\d{4})", e.name)
+                     for e in (out / "fields").iterdir()) if m)
+    if ranks == 1:  # stopped between increments: tables and fields list the same ones
+        assert listed == done and fields == done, (listed, fields, done)
+    else:  # mpirun kills the ranks a second after its SIGTERM: at most the next one more
+        following = [(last[0], last[1] + 1)]
+        assert listed in (done, done + following) and fields in (done, done + following)
+    assert not (out / "summary.json").exists()
+
+
+# ------------------------------------------------------------------ a full disk
+
+def _can_mount() -> bool:
+    return os.geteuid() == 0 and shutil.which("mount") is not None
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A tmpfs of a given size at tmp_path / "disk" (root only)."""
+    mounted = []
+
+    def mount(size: str) -> Path:
+        where = tmp_path / "disk"
+        where.mkdir()
+        proc = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs",
+                               str(where)], capture_output=True, text=True)
+        if proc.returncode != 0:
+            pytest.skip(f"cannot mount a tmpfs: {proc.stderr.strip()}")
+        mounted.append(where)
+        return where
+    yield mount
+    for where in mounted:
+        subprocess.run(["umount", str(where)], check=False)
+
+
+@pytest.mark.skipif(not _can_mount(), reason="mounting a small tmpfs needs root")
+@pytest.mark.parametrize("ranks", [1, 2], ids=["serial", "2ranks"])
+@pytest.mark.parametrize("what", ["tables", "fields"])
+def test_full_disk_one_line(tmp_path, small_disk, what, ranks):
+    """The disk fills up while the tables (no fields: 12 KiB) or the fields (120 KiB) are
+    written: one line naming the file, exit 2, whole increments only, tables that agree."""
+    if ranks > 1 and shutil.which("mpirun") is None:
+        pytest.skip("mpirun not found")
+    meshes.two_boxes(tmp_path / "two.msh", n_block=(2, 2, 1), n_foundation=(3, 3, 1))
+    (tmp_path / "scene.toml").write_text(SCENE)
+    disk = small_disk("12k" if what == "tables" else "120k")
+    out = disk / "results"
+    command, env = _command(ranks)
+    proc = subprocess.run([*command, str(tmp_path / "scene.toml"), "--out", str(out),
+                           "--quiet", "--set", f"output.fields={str(what == 'fields').lower()}"],
+                          capture_output=True, text=True, env=env, timeout=300)
+    stderr = compat.mpirun_stderr(proc.stderr)
+    lines = stderr.splitlines()
+    assert len(lines) == 1 and "Traceback" not in stderr, stderr
+    assert proc.returncode == 2, (proc.returncode, stderr)
+    assert "No space left on device" in lines[0], lines[0]
+    if what == "tables":
+        assert f"{out}/contact.csv" in lines[0] or f"{out}/history.csv" in lines[0], lines[0]
+    else:
+        assert f"{out}/fields/step" in lines[0], lines[0]
+    done = _increments(out / "history.csv")  # whole rows only (_read_table checks)
+    assert done, "nothing was written before the disk was full"
+    assert _increments(out / "contact.csv") == done
+    header, rows = _read_table(out / "contact.csv")
+    assert len(rows) == 9 * len(done)  # every increment's block whole: 9 slave nodes
+    if what == "fields":
+        visible = sorted(e.name for e in (out / "fields").iterdir())
+        assert visible == [f"step{s}_increment{i:04d}" for s, i in done], visible
+    assert not (out / "summary.json").exists()
