@@ -1,14 +1,18 @@
 """Load stepping: increments with a predictor, cutbacks and rollback of the history.
 
 A step ramps what ``load(t)`` prescribes from pseudo-time 0 to 1.  An increment whose
-Newton iteration fails, or in which a whole contact zone vanishes off its master, is
+Newton iteration fails, whose converged state is not finite (displacements, reactions,
+contact values), or in which a whole contact zone vanishes off its master, is
 retried at half the size after the displacement and the friction history are rolled
 back; the history is committed only on convergence.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Callable, Optional
+
+import numpy as np
 
 from dolfinx_friction.newton import Newton, NewtonTrace
 from dolfinx_friction.system import BlockProblem
@@ -47,6 +51,26 @@ class ConvergenceError(RuntimeError):
                          + (f": {reason})" if reason else ")"))
         self.increment, self.t, self.residual, self.reason = increment, t, residual, reason
         self.records, self.cutbacks, self.iterations = records, cutbacks, iterations
+
+
+#: why an increment whose Newton iteration converged is not a result (see :func:`_finite`)
+NON_FINITE = "non-finite displacement, reaction or contact value"
+
+
+def _finite(problem: BlockProblem) -> bool:
+    """Whether what a converged increment reports is finite on every rank (collective):
+    the unknowns (displacements, obstacle translations), the internal forces (reactions
+    and obstacle forces are read from them) and every contact pair's state (the contact
+    table and fields).  The residual norm leaves out constrained rows, so a converged
+    norm does not tell that their reactions are finite."""
+    ok = bool(np.isfinite(problem.x.getArray(readonly=True)).all()
+              and np.isfinite(problem.internal).all())
+    for c in problem.contacts:
+        state = c.state() if ok and hasattr(c, "state") else None
+        if state is not None and dataclasses.is_dataclass(state):
+            ok = all(np.isfinite(np.asarray(getattr(state, f.name), dtype=float)).all()
+                     for f in dataclasses.fields(state))
+    return problem.comm.allreduce(int(not ok)) == 0
 
 
 class IncrementSize:
@@ -104,7 +128,9 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
             c.begin(x, start=x_n)
         trace = newton.solve(problem)
         spent += trace.iterations
-        ok = trace.converged
+        ok, why = trace.converged, ""
+        if ok and not _finite(problem):
+            ok, why = False, NON_FINITE  # never a result: cut back
         if ok and size.level < max_cutbacks and any(c.zone_vanished()
                                                     for c in problem.contacts):
             ok = False  # too coarse to tell a slide off the master from a lost contact
@@ -117,7 +143,7 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
             failures += 1
             if size.level > max_cutbacks:
                 raise ConvergenceError(len(records) + 1, t, trace.residuals[-1], max_cutbacks,
-                                       records, failures, spent, problem.inadmissible)
+                                       records, failures, spent, problem.inadmissible or why)
             continue
         size.converged(trace.iterations)
         rate = rate if rate is not None else x.duplicate()

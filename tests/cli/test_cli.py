@@ -549,6 +549,25 @@ CASES = [
     Case("tabular_decreasing_pressure", ["contact.0.table.2.0 = 5.0", "increase"],
          [("contact.0.law", "tabular"),
           ("contact.0.table", [[0.0, 0.0], [10.0, 0.01], [5.0, 0.02]])]),
+    # finite but too large to solve with (the residual norm squares the forces)
+    Case("E_1e300", ["body.1.E = 1e+300", "too large"], command="run",
+         args=["--set", "body.1.E=1e300", "--out", "{d}/never"]),
+    Case("K_1e200", ["contact.0.K = 1e+200", "too large"], [("contact.0.K", 1e200)]),
+    Case("stick_slope_1e200", ["contact.0.stick_slope = 1e+200", "too large"],
+         [("contact.0.stick_slope", 1e200)]),
+    # bodies that nothing holds against rigid motion
+    Case("body_not_held", ["body.0", "'block'", "not held", "step 0"],
+         [("contact", []), ("step.0.bc.1.u", ["free", "free", "free"]),
+          ("step.0.load", [{"on": "block_top", "traction": [0.0, 0.0, -1.0]}]),
+          ("step.1.bc.0.u", ["free", "free", "free"])], command="run",
+         args=["--out", "{d}/never"]),
+    Case("body_on_forced_obstacle_only", ["body.0", "'block'", "not held"],
+         [("step.0.bc.0.u", ["free", "free", "free"]),
+          ("step.0.rigid.0", {"name": "floor", "force": [0.0, 0.0, 1.0]})], base="rigid"),
+    Case("body_freed_in_later_step", ["body.0", "'block'", "not held", "step 1"],
+         [("step.1", {"name": "let go", "bc": [{"on": "top", "u": ["free", "free", "free"]}],
+                      "rigid": [{"name": "floor", "force": [0.0, 0.0, 0.0]}]})],
+         base="rigid"),
     # names that mean two things, groups that are no contact surface
     Case("rigid_named_like_facet_group", ["rigid.0.name", "'side_x0'", "ambiguous"],
          [("rigid.0.name", "side_x0"), ("contact.0.master", "side_x0"),
@@ -814,7 +833,8 @@ def test_mpirun_matches_serial(workdir, good_run):
 
 
 MPI_CASES = ["mesh_is_a_geo_script", "mesh_tangled_cell", "mesh_nan_coordinate",
-             "slave_spans_two_bodies", "interior_slave", "rigid_named_like_facet_group"]
+             "slave_spans_two_bodies", "interior_slave", "rigid_named_like_facet_group",
+             "E_1e300", "body_not_held"]
 
 
 @pytest.mark.skipif(shutil.which("mpirun") is None, reason="mpirun not found")
