@@ -81,17 +81,17 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
                 warn(pair + " detached", f"contact {pair}: {count} slave node(s) in contact slid "
                                          f"off the master surface at t = {inc.t:.4g}")
         if writer is not None:
-            # a signal waits while the increment is written (whole or not at all), then
-            # stops every rank here, all together
+            # a signal from now on stops the run after this increment, which is written
+            # whole first (the line names the next one: of the next step at t = 1); then
+            # every rank stops here, all together
+            interruption.where = ((inc.step + 1, 1) if inc.t - inc.step > 1.0 - 1e-12
+                                  else (inc.step, inc.increment + 1))
             interruption.writing = True
             try:
                 with solver.timers.measure("output"):
                     writer.increment(inc)
             finally:
                 interruption.writing = False
-            # what a signal now interrupts: the next increment (of the next step at t = 1)
-            interruption.where = ((inc.step + 1, 1) if inc.t - inc.step > 1.0 - 1e-12
-                                  else (inc.step, inc.increment + 1))
             interruption.checkpoint(comm)
 
     try:

@@ -131,10 +131,8 @@ def _on_signal(signum: int, frame) -> None:
     if state.signum is not None:  # already stopping (a second Ctrl-C, or SIGTERM after it)
         return
     state.signum = signum
-    if state.writing:  # the increment being written is complete in a moment: the checkpoint
-        return         # right after it names the next one
     state.announce()
-    if not state.solving:
+    if not (state.solving or state.writing):
         raise Interrupted(signum)
 
 
@@ -148,8 +146,7 @@ def _watch_signals(signals: set) -> None:
     This thread needs only the GIL, which such waits release."""
     while True:
         signum = signal.sigwait(signals)
-        if interruption.signum is None and not interruption.writing:
-            interruption.announce()
+        interruption.announce()  # (once: a second Ctrl-C says nothing more)
         _thread.interrupt_main(signum)  # runs _on_signal in the main thread
 
 

@@ -64,8 +64,8 @@ class Interruption:
     residual evaluations and the end of each written increment), so that all ranks stop
     at the same place and none waits in a collective for a rank that left.  While an
     increment's results are written (``writing``) the signal only waits: an increment is
-    written whole or not at all, and the line is printed by the checkpoint right after it.
-    Elsewhere (set-up) the handler raises at once.
+    written whole, then the checkpoint right after it stops the run (``where`` already
+    names the next increment).  Elsewhere (set-up) the handler raises at once.
 
     ``where`` is the (step, increment) being solved, ``directory`` the results directory
     once it exists.  The one line is printed by rank 0 at the first moment it can be
