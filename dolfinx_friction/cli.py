@@ -146,6 +146,7 @@ def _watch_signals(signals: set) -> None:
     This thread needs only the GIL, which such waits release."""
     while True:
         signum = signal.sigwait(signals)
+        interruption.received = interruption.received or signum
         interruption.announce()  # (once: a second Ctrl-C says nothing more)
         _thread.interrupt_main(signum)  # runs _on_signal in the main thread
 
@@ -191,6 +192,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f"dolfinx-friction: error: {message}", file=sys.stderr, flush=True)
         return status
     if interruption.announced:  # a signal came after the last checkpoint: say what was said
+        # the main thread may finish before the handler ran: the signal thread's signal
+        # counts, and the late handler then finds the run already stopping
+        interruption.signum = interruption.signum or interruption.received
         return EXIT_SIGNAL.get(interruption.signum, 128 + interruption.signum)
     return 0
 

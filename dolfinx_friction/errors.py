@@ -77,6 +77,7 @@ class Interruption:
     def __init__(self) -> None:
         self.armed = False  # handlers installed (the command line); else checkpoints are no-ops
         self.signum: Optional[int] = None
+        self.received: Optional[int] = None  # the first signal the signal thread took
         self.announced = False
         self.solving = False
         self.writing = False
@@ -106,7 +107,7 @@ class Interruption:
         """Collective: raise :class:`Interrupted` on every rank if any rank got a signal."""
         if not self.armed:
             return
-        signum = self.signum or 0
+        signum = self.signum or self.received or 0  # the handler may not have run yet
         if comm.size > 1:
             signum = comm.allreduce(signum, op=_max_op())
         if signum:
