@@ -19,7 +19,7 @@ from dolfinx_friction import compat, gmsh_io
 from dolfinx_friction.fields import BodyField, make_fields
 from dolfinx_friction.model import Body, ContactPair, Scene
 from dolfinx_friction.pair import NodeToSurface, Surface, make_law
-from dolfinx_friction.system import BlockProblem, Timers  # noqa: F401  (Timers: re-export)
+from dolfinx_friction.system import BlockProblem
 
 
 class ModelError(ValueError):
