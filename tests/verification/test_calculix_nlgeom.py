@@ -83,6 +83,18 @@ def _ccx(scene: Scene, inp) -> calculix.CcxRun:
     return calculix.run_ccx(inp, details=True)
 
 
+def _ours_and_ccx(scene: Scene, inp):
+    """(our run, ccx's run, our wall time): both codes on the scene, same increments."""
+    from dolfinx_friction.api import run
+    ccx = _ccx(scene, inp)
+    t0 = time.perf_counter()
+    result = run(scene, write=False, quiet=True)
+    wall = time.perf_counter() - t0
+    assert [(i.step, i.increment) for i in result.increments] == \
+        [(s, k) for s in sorted(ccx.reactions) for k in sorted(ccx.reactions[s])]
+    return result, ccx, wall
+
+
 def press_shear_scene(mesh, block_model: str = "neo-hookean", depth: float = 0.3 * 0.25,
                       shear: float = 0.09, shear_increments: int = 6) -> Scene:
     return Scene(
@@ -125,16 +137,8 @@ def test_deck_at_finite_strain(tmp_path):
 def test_neo_hookean_press_and_shear_matches_calculix(tmp_path):
     """Press by 30 % (4 increments), shear with partial slip (6): reactions of both groups
     within 2e-3 of CalculiX's in every increment (measured 9.1e-4)."""
-    from dolfinx_friction.api import run
-
     scene = press_shear_scene(_blocks_mesh(tmp_path / "blocks.msh"))
-    ccx = _ccx(scene, tmp_path / "press_shear.inp")
-    t0 = time.perf_counter()
-    result = run(scene, write=False, quiet=True)
-    wall = time.perf_counter() - t0
-
-    assert [(i.step, i.increment) for i in result.increments] == \
-        [(s, k) for s in sorted(ccx.reactions) for k in sorted(ccx.reactions[s])]
+    result, ccx, wall = _ours_and_ccx(scene, tmp_path / "press_shear.inp")
     rows, worst = _compare(result.increments, ccx.reactions)
     summary = f"worst |dR|/|R| = {worst:.2e}; wall time: ours {wall:.2f} s, ccx {ccx.wall:.2f} s"
     report = "\n".join([*rows, summary])
@@ -272,16 +276,8 @@ def test_neo_hookean_ironing_matches_calculix(tmp_path):
     """Ironing at finite strain on one layer of hexahedra: the end-of-indentation force
     within 1e-3 of CalculiX's, the mean sliding force within 5e-3, the friction ratio within
     0.002 (measured 2.3e-4, 1.1e-3, 2.4e-4)."""
-    from dolfinx_friction.api import run
-
     scene = ironing_scene(ironing_mesh(tmp_path / "ironing.msh"))
-    ccx = _ccx(scene, tmp_path / "ironing.inp")
-    t0 = time.perf_counter()
-    result = run(scene, write=False, quiet=True)
-    wall = time.perf_counter() - t0
-
-    assert [(i.step, i.increment) for i in result.increments] == \
-        [(s, k) for s in sorted(ccx.reactions) for k in sorted(ccx.reactions[s])]
+    result, ccx, wall = _ours_and_ccx(scene, tmp_path / "ironing.inp")
     ours = ironing_figures({(i.step, i.increment): i.reactions["die_top"]
                             for i in result.increments})
     theirs = ironing_figures({(s, k): r["die_top"] for s, incs in ccx.reactions.items()
