@@ -30,7 +30,8 @@ that models the same problem as dolfinx_friction:
   ``pairing_iterations = 8``; ``pairing_iterations = 1`` becomes ``SMALL
   SLIDING``) with a ``*SURFACE INTERACTION`` whose law parameters are those
   of :meth:`ContactPair.resolved` (``K``, ``sigma_inf``, ``c0``; ``mu``,
-  ``lambda``), always written explicitly (CalculiX's own defaults come from
+  ``lambda``; the default ``K`` and ``lambda`` with :func:`slave_spacing`), always
+  written explicitly (CalculiX's own defaults come from
   the first material of the deck, ours from the slave body);
 * one ``*STEP`` per scene step, ``*STATIC, DIRECT`` with the scene's number of
   equal increments.  In a ``*STATIC`` step CalculiX ramps boundary values and
@@ -70,11 +71,12 @@ from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 
+from dolfinx_friction.contact.shapes import FACE_TYPES, face_areas
 from dolfinx_friction.gmsh_io import gmsh_file, group_elements
 from dolfinx_friction.model import MODELS, Body, ContactPair, Scene
 
 __all__ = ["CCX_FACES", "CcxError", "CcxRun", "ccx_available", "ccx_executable", "parse_dat",
-           "read_mesh", "run_ccx", "write_inp", "DEFAULT_FIELD_CONTROLS"]
+           "read_mesh", "run_ccx", "slave_spacing", "write_inp", "DEFAULT_FIELD_CONTROLS"]
 
 #: CalculiX face numbering (``S1``...) of its elements as 0-based local nodes,
 #: from the ``ifaceq``/``ifacet`` tables of the CalculiX sources (the node
@@ -323,6 +325,22 @@ def _traction_forces(mesh: CcxMesh, group: str) -> tuple[np.ndarray, np.ndarray]
     return uniq, np.bincount(inv, weights=weights_a)
 
 
+def slave_spacing(mesh: CcxMesh, group: str) -> float:
+    """The node spacing h of a slave facet group, as :attr:`NodeToSurface.spacing` finds it
+    (the median over the group's nodes of the square root of each node's share
+    ``sum_f w_p,f A_f`` of the face areas): what the default ``K`` and ``stick_slope``
+    scale with."""
+    _, parts = mesh._group(group)
+    faces = np.concatenate([p for _, p in parts]).astype(np.int64)
+    # Gmsh orders a quadrilateral's nodes around it, the Q4 face type as a tensor product
+    face, order = (FACE_TYPES["Q4"], [0, 1, 3, 2]) if faces.shape[1] == 4 else \
+        (FACE_TYPES["T3"], [0, 1, 2])
+    faces = faces[:, order]
+    shares = face_areas(face, mesh.x[faces - 1])[:, None] * np.asarray(face.area_weights)
+    area = np.bincount(faces.ravel(), weights=shares.ravel())[np.unique(faces)]
+    return float(np.median(np.sqrt(area)))
+
+
 def _interaction_lines(name: str, pair: ContactPair) -> list[str]:
     lines = [f"*SURFACE INTERACTION, NAME={name}"]
     if pair.law == "linear":
@@ -427,7 +445,8 @@ def write_inp(scene: Scene, path: Union[str, Path], *,
         if len(slave_bodies) != 1:
             raise ValueError(f"contact.{k}.slave: group {pair.slave!r} must lie on exactly one "
                              f"body, found {slave_bodies}")
-        resolved = pair.resolved(scene.body(slave_bodies[0]).E)
+        resolved = pair.resolved(scene.body(slave_bodies[0]).E,
+                                 slave_spacing(mesh, pair.slave))
         for role in (pair.slave, pair.master):
             surf = name("S", role)
             if not any(line == f"*SURFACE, NAME={surf}, TYPE=ELEMENT" for line in out):

@@ -2,8 +2,8 @@
 
 Plain dataclasses, no dolfinx.  Quantities whose default depends on the mesh
 or on the slave body's material (``K``, ``sigma_inf``, ``stick_slope``) are
-``None`` here and resolved by :meth:`ContactPair.resolved` once the slave
-body is known.
+``None`` here (or :data:`CALCULIX` for CalculiX's rule) and resolved by
+:meth:`ContactPair.resolved` once the slave body and its node spacing are known.
 """
 from __future__ import annotations
 
@@ -23,6 +23,21 @@ LAWS = ("linear", "exponential", "tabular", "hard")
 MODELS = ("linear", "saint-venant-kirchhoff", "neo-hookean")
 SHAPES = ("plane", "sphere", "cylinder")
 TANGENTS = ("consistent", "calculix")
+
+#: ``K = "calculix"``, ``stick_slope = "calculix"``: CalculiX's rules, 50 E and E/2.
+CALCULIX = "calculix"
+#: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
+#: h: its node spacing, see :meth:`ContactPair.resolved`), from the stability maps
+#: (benchmarks/stability/README.md).  K = 10 E/h is the stiffest decade at which every
+#: K x increment map converges for every increment size and method (with line search
+#: without a cutback); at 100 E/h frictional sliding fails or loses the contact, at
+#: 1 E/h the overclosure reaches 4 % of the spacing (Hertz, ironing: the penetration
+#: warning fires).  lambda = 1 E/h: the stiffest decade at which both stick slope x mu
+#: maps converge for every mu with and without line search, the full-slip ratio within
+#: 1 % of mu on the block (10 E/h: cutbacks and a lost contact on the ironing, 100 E/h
+#: fails; <= 0.01 E/h does not mobilise the friction).
+PENALTY_PER_SPACING = 10.0
+STICK_SLOPE_PER_SPACING = 1.0
 
 
 @dataclass(frozen=True)
@@ -70,28 +85,42 @@ class ContactPair:
     slave: str
     master: str
     law: str = "linear"
-    K: Optional[float] = None
+    K: Union[float, str, None] = None  # None: the default; CALCULIX: 50 E
     sigma_inf: Optional[float] = None
     c0: Optional[float] = None
     p0: Optional[float] = None
     table: Optional[tuple[tuple[float, float], ...]] = None  # (pressure, overclosure)
     mu: float = 0.0
-    stick_slope: Optional[float] = None
+    stick_slope: Union[float, str, None] = None  # None: the default; CALCULIX: E/2
     tangent: str = "consistent"
     #: Newton iterations per increment in which slave nodes are re-paired;
     #: later iterations keep the pairing frozen (CalculiX: 8).
     pairing_iterations: int = 8
 
-    def resolved(self, E_slave: float) -> "ContactPair":
-        """Fill the defaults of contact-theory.md §8 from the slave body's E."""
+    def resolved(self, E_slave: float, spacing: Optional[float] = None) -> "ContactPair":
+        """Fill the defaults (contact-theory.md §8, scene-format.md version 2).
+
+        ``sigma_inf = E/70000``, ``c0 = 1e-3``; with the slave node spacing ``h``
+        (``spacing``, see :attr:`NodeToSurface.spacing`) also ``K = 10 E/h`` and
+        ``stick_slope = E/h`` (:data:`PENALTY_PER_SPACING`, :data:`STICK_SLOPE_PER_SPACING`);
+        :data:`CALCULIX` gives 50 E and E/2.  Without ``spacing`` a defaulted ``K`` and
+        ``stick_slope`` stay ``None`` (the pressure laws other than linear need no ``h``).
+        """
+        def rule(value, per_spacing: float, calculix: float):
+            if value == CALCULIX:
+                return calculix * E_slave
+            if value is None and spacing is not None:
+                return per_spacing * E_slave / spacing
+            return value
+
         law = "linear" if self.law == "hard" else self.law
         return replace(
             self,
             law=law,
-            K=self.K if self.K is not None else 50.0 * E_slave,
+            K=rule(self.K, PENALTY_PER_SPACING, 50.0),
             sigma_inf=self.sigma_inf if self.sigma_inf is not None else E_slave / 70000.0,
             c0=self.c0 if self.c0 is not None else 1e-3,
-            stick_slope=self.stick_slope if self.stick_slope is not None else E_slave / 2.0,
+            stick_slope=rule(self.stick_slope, STICK_SLOPE_PER_SPACING, 0.5),
         )
 
 

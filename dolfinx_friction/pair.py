@@ -27,7 +27,7 @@ is a pressure per length.
 from __future__ import annotations
 
 import uuid
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Optional, Sequence, Union
 
 import numpy as np
@@ -40,7 +40,7 @@ from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.fields import BodyField, DofLayout
 from dolfinx_friction.gmsh_io import BodyMesh
 from dolfinx_friction.interaction import ContactInteraction, RigidMaster
-from dolfinx_friction.model import Body, ContactPair, Rigid
+from dolfinx_friction.model import CALCULIX, Body, ContactPair, Rigid
 from dolfinx_friction.surfaces import SlaveNodes, master_faces
 
 NO_ELEMENT = -1  #: status of a slave node without a contact element (far from the master)
@@ -191,9 +191,11 @@ class NodeToSurface:
     law : pressure-overclosure law (``contact.Linear``, ``Exponential``, ``Tabular``);
         default: the linear law with penalty ``K``, ``sigma_inf``, ``c0``.
     K, sigma_inf, c0 : the linear law's penalty [pressure/length], tension limit
-        [pressure] and cutoff factor; defaults 50 E, E / 70000, 1e-3 (contact-theory.md §8).
+        [pressure] and cutoff factor; defaults 10 E/h (h: :attr:`spacing`), E / 70000, 1e-3
+        (contact-theory.md §8); ``K="calculix"``: CalculiX's 50 E.
     mu : Coulomb friction coefficient (0: frictionless, the friction path is skipped).
-    stick_slope : tangential penalty ``lambda`` [pressure/length], default E / 2.
+    stick_slope : tangential penalty ``lambda`` [pressure/length], default E/h;
+        ``"calculix"``: E / 2.
     E : the slave body's Young's modulus, for the defaults above.
     tangent : ``"consistent"`` (the exact tangent) or ``"calculix"``.
     thickness : out-of-plane thickness of a 2D (plane) body, scales slave areas.
@@ -205,6 +207,11 @@ class NodeToSurface:
 
     Attributes
     ----------
+    spacing : the slave surface's node spacing ``h`` [length] the defaults are scaled
+        with: the median over all slave nodes (all ranks) of each node's spacing in the
+        reference configuration (its representative area per thickness in 2D, the square
+        root of it in 3D; :class:`~dolfinx_friction.surfaces.SlaveNodes`).
+    law, stick_slope, mu : the contact law as used, defaults resolved (:meth:`resolved`).
     ramp : share of the initial overclosures (found at the first pairing) still removed
         from the clearances (contact-theory.md §3.4): ``1 - t`` in a first static step
         that resolves them gradually, 0 otherwise (default).
@@ -212,9 +219,9 @@ class NodeToSurface:
 
     def __init__(self, slave: Surface, master: Union[Surface, Rigid], *,
                  spaces: Optional[Sequence] = None, law: Optional[Law] = None,
-                 K: Optional[float] = None, sigma_inf: Optional[float] = None,
+                 K: Union[float, str, None] = None, sigma_inf: Optional[float] = None,
                  c0: Optional[float] = None, mu: float = 0.0,
-                 stick_slope: Optional[float] = None, E: Optional[float] = None,
+                 stick_slope: Union[float, str, None] = None, E: Optional[float] = None,
                  tangent: str = "consistent", thickness: float = 1.0,
                  pairing_iterations: int = 8, name: str = "contact",
                  obstacle_index: Optional[int] = None, n_obstacles: int = 0,
@@ -229,8 +236,8 @@ class NodeToSurface:
         if spaces is None:
             spaces = [slave.V] if rigid or master.V is slave.V else [slave.V, master.V]
         self.spaces = list(spaces)
-        self.params = self._parameters(law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
-                                       pairing_iterations)
+        given = self._given(law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
+                            pairing_iterations)
         self.layout = DofLayout(comm, [V.dofmap.index_map for V in self.spaces], n_obstacles)
         slave_facets = _facets(slave, f"{name}: slave", comm)
         self._fields: list[BodyField] = []
@@ -265,6 +272,8 @@ class NodeToSurface:
             master_side = master_faces(self._master_field, "master")
         slaves = SlaveNodes(slave_field, "slave")
         self._slave_field = slave_field
+        self.spacing = float(np.median(np.concatenate(comm.allgather(slaves.spacing))))
+        self.params = self._parameters(given, law, E)
         self._interaction = ContactInteraction(comm, name, self.params.element, slaves,
                                                master_side, self.gdim,
                                                self.params.pairing_iterations)
@@ -294,34 +303,77 @@ class NodeToSurface:
             raise AttributeError(f"{self.name}: the master is not a rigid obstacle")
         master.translation[:] = _vector(value, f"{self.name}: obstacle translation")
 
+    @property
+    def law(self) -> Law:
+        """The pressure-overclosure law in use, defaults resolved (``Linear``: ``K``,
+        ``sigma_inf``, ``c0``)."""
+        return self.params.element.law
+
+    @property
+    def stick_slope(self) -> float:
+        """The stick slope ``lambda`` in use [pressure/length], default resolved."""
+        return self.params.element.stick_slope
+
+    @property
+    def mu(self) -> float:
+        return self.params.element.mu
+
+    def resolved(self) -> dict:
+        """The contact law as used, every default resolved, as plain numbers: ``law``
+        (``"linear"``, ``"exponential"``, ``"tabular"``) and its parameters (``K``,
+        ``sigma_inf``, ``c0`` / ``c0``, ``p0`` / ``pressures``, ``overclosures``),
+        ``mu``, ``stick_slope`` and the slave node ``spacing`` h the defaults scale with."""
+        return {"law": type(self.law).__name__.lower(), **asdict(self.law), "mu": self.mu,
+                "stick_slope": self.stick_slope, "spacing": self.spacing}
+
     # ------------------------------------------------------------- set-up
-    def _parameters(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
-                    pairing_iterations) -> "_Parameters":
+    def _given(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
+               pairing_iterations) -> ContactPair:
+        """The parameters as given, checked; defaults still to be resolved."""
         name = self.name
-        for key, value in (("K", K), ("sigma_inf", sigma_inf), ("c0", c0), ("mu", mu),
-                           ("stick_slope", stick_slope), ("E", E)):
-            if value is not None and not np.isfinite(value):
+        for key, value in (("K", K), ("stick_slope", stick_slope)):
+            if isinstance(value, str) and value != CALCULIX:
+                raise ContactSetupError(f"{name}: {key} must be a number or {CALCULIX!r}, got "
+                                        f"{value!r}")
+        numbers = [(key, value) for key, value in (("K", K), ("sigma_inf", sigma_inf),
+                                                   ("c0", c0), ("mu", mu),
+                                                   ("stick_slope", stick_slope), ("E", E))
+                   if value is not None and value != CALCULIX]
+        for key, value in numbers:
+            if not np.isfinite(value):
                 raise ContactSetupError(f"{name}: {key} must be finite, got {value}")
         if mu < 0.0:
             raise ContactSetupError(f"{name}: mu must be >= 0, got {mu}")
-        for key, value in (("K", K), ("stick_slope", stick_slope), ("E", E)):
-            if value is not None and value <= 0.0:
+        for key, value in numbers:
+            if key in ("K", "stick_slope", "E") and value <= 0.0:
                 raise ContactSetupError(f"{name}: {key} must be positive, got {value}")
         if tangent not in ("consistent", "calculix"):
             raise ContactSetupError(f"{name}: tangent must be 'consistent' or 'calculix', "
                                     f"got {tangent!r}")
         if int(pairing_iterations) < 1:
             raise ContactSetupError(f"{name}: pairing_iterations must be >= 1")
-        missing = [key for key, value in (("K", K if law is None else 1.0),
-                                          ("sigma_inf", sigma_inf if law is None else 1.0),
-                                          ("stick_slope", stick_slope if mu > 0 else 1.0))
-                   if value is None]
-        if missing and E is None:
+        defaulted = [key for key, value in (("K", K if law is None else 1.0),
+                                            ("sigma_inf", sigma_inf if law is None else 1.0),
+                                            ("stick_slope", stick_slope if mu > 0 else 1.0))
+                     if value is None or value == CALCULIX]
+        if defaulted and E is None:
             raise ContactSetupError(f"{name}: give E (the slave body's Young's modulus) for "
-                                    f"the default {', '.join(missing)}, or give them")
-        pair = ContactPair("slave", "master", K=K, sigma_inf=sigma_inf, c0=c0, mu=float(mu),
+                                    f"the default {', '.join(defaulted)}, or give them")
+        return ContactPair("slave", "master", K=K, sigma_inf=sigma_inf, c0=c0, mu=float(mu),
                            stick_slope=stick_slope, tangent=tangent,
-                           pairing_iterations=int(pairing_iterations)).resolved(E or 1.0)
+                           pairing_iterations=int(pairing_iterations))
+
+    def _parameters(self, given: ContactPair, law: Optional[Law],
+                    E: Optional[float]) -> "_Parameters":
+        """Resolve the defaults with the slave node spacing (:meth:`ContactPair.resolved`)."""
+        pair = given.resolved(E or 1.0, self.spacing)
+        for key in ("K", "stick_slope"):
+            value = getattr(pair, key)
+            if not 0.0 < value < np.inf:
+                raise ContactSetupError(f"{self.name}: the default {key} = {value:g} (from E = "
+                                        f"{E} and the slave node spacing h = "
+                                        f"{self.spacing:g}) is not a positive finite number: "
+                                        f"give {key}")
         law = law if law is not None else make_law(pair)
         return _Parameters(ContactParameters(law, pair.mu, pair.stick_slope, pair.tangent),
                            pair.pairing_iterations)

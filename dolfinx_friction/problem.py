@@ -18,7 +18,7 @@ from petsc4py import PETSc
 from dolfinx_friction import compat, gmsh_io
 from dolfinx_friction.fields import BodyField, make_fields
 from dolfinx_friction.model import Body, ContactPair, Scene
-from dolfinx_friction.pair import NodeToSurface, Surface, make_law
+from dolfinx_friction.pair import ContactSetupError, NodeToSurface, Surface, make_law
 from dolfinx_friction.system import BlockProblem
 
 
@@ -140,7 +140,8 @@ class ContactProblem:
         self._check_groups()
         self.fields, self.layout = make_fields(
             comm, [(b, self.meshes.bodies[b.name]) for b in scene.bodies], len(scene.rigids))
-        self.pairs = {f"{c.slave}->{c.master}": self._pair(c) for c in scene.contacts}
+        self.pairs = {f"{c.slave}->{c.master}": self._pair(c, f"contact.{i}")
+                      for i, c in enumerate(scene.contacts)}
         self.follower_pressures = self._follower_pressures()
         forms = [self._forms(f) for f in self.fields]
         self.system = BlockProblem([F for F, _ in forms], [f.u for f in self.fields],
@@ -288,10 +289,10 @@ class ContactProblem:
         return self.system.rigid_body_modes()
 
     # ------------------------------------------------------------- contact
-    def _pair(self, pair: ContactPair) -> NodeToSurface:
+    def _pair(self, pair: ContactPair, key: str) -> NodeToSurface:
         slave_field = self.group_fields(pair.slave)[0]
         body = slave_field.body
-        pair = pair.resolved(body.E)
+        pair = pair.resolved(body.E)  # K and stick_slope: by NodeToSurface, with its spacing
         rigid = self.scene.rigid(pair.master)
         fdim = self.gdim - 1
         slave_tags, _ = slave_field.mesh.meshtags(fdim, [pair.slave])
@@ -301,13 +302,18 @@ class ContactProblem:
             master_field = self.group_fields(pair.master)[0]
             master = Surface(master_field.V, master_field.mesh.meshtags(fdim, [pair.master])[0], 1)
             index = None
-        return NodeToSurface(
-            Surface(slave_field.V, slave_tags, 1), master, spaces=[f.V for f in self.fields],
-            law=make_law(pair), mu=pair.mu, stick_slope=pair.stick_slope, tangent=pair.tangent,
-            thickness=body.thickness if self.gdim == 2 else 1.0,
-            pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
-            obstacle_index=index, n_obstacles=len(self.scene.rigids),
-            body_names=(body.name, pair.master))
+        try:
+            return NodeToSurface(
+                Surface(slave_field.V, slave_tags, 1), master, spaces=[f.V for f in self.fields],
+                law=None if pair.law == "linear" else make_law(pair), K=pair.K,
+                sigma_inf=pair.sigma_inf, c0=pair.c0, E=body.E, mu=pair.mu,
+                stick_slope=pair.stick_slope, tangent=pair.tangent,
+                thickness=body.thickness if self.gdim == 2 else 1.0,
+                pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
+                obstacle_index=index, n_obstacles=len(self.scene.rigids),
+                body_names=(body.name, pair.master))
+        except ContactSetupError as error:  # e.g. a default K that overflows
+            raise ModelError(f"{key}: {error}") from None
 
     def pair_of(self, contact: ContactPair) -> NodeToSurface:
         """The :class:`NodeToSurface` of a scene contact."""

@@ -1,6 +1,6 @@
 """Scene files: TOML → validated :mod:`dolfinx_friction.model` objects.
 
-The format is the contract of ``shared/scene-format.md`` (version 1).  This
+The format is the contract of ``shared/scene-format.md`` (version 2).  This
 module is pure Python (no dolfinx): it checks everything that can be checked
 without the mesh — key names, types, ranges, references between sections and
 the consistency of vector lengths across the scene.  What needs the mesh
@@ -28,6 +28,7 @@ from typing import Any, NoReturn, Optional, Union
 
 from dolfinx_friction.model import (
     BC,
+    CALCULIX,
     LAWS,
     MODELS,
     SHAPES,
@@ -161,6 +162,16 @@ def _modulus(value: Any, key: str) -> float:
         _fail(key, "is so large that the penalty K = 50 E (CalculiX's default) overflows",
               value)
     return E
+
+
+def _penalty(value: Any, key: str) -> Union[float, str]:
+    """``K`` or ``stick_slope``: a number > 0, or ``"calculix"`` for CalculiX's rule."""
+    if isinstance(value, str):
+        if value == CALCULIX:
+            return value
+        _fail(key, f"must be a number > 0 or {_toml(CALCULIX)}" + _suggest(value, [CALCULIX]),
+              value)
+    return _number(gt=0)(value, key)
 
 
 def _one_of(*options: Any) -> Check:
@@ -381,13 +392,13 @@ _CONTACT = _record(ContactPair, {
     "slave": _Key(_name, required=True),
     "master": _Key(_name, required=True),
     "law": _Key(_one_of(*LAWS)),
-    "K": _Key(_number(gt=0)),
+    "K": _Key(_penalty),
     "sigma_inf": _Key(_number(gt=0)),
     "c0": _Key(_number(gt=0)),
     "p0": _Key(_number(ge=0)),
     "table": _Key(_pressure_table),
     "mu": _Key(_number(ge=0)),
-    "stick_slope": _Key(_number(gt=0)),
+    "stick_slope": _Key(_penalty),
     "tangent": _Key(_one_of(*TANGENTS)),
     "pairing_iterations": _Key(_integer(1, 10_000)),
 }, _check_law, _check_not_self_contact)
