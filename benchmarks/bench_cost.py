@@ -6,9 +6,10 @@
 
 Scene (``benchmarks/_meshes.two_boxes``, i.e. ``tests/meshes.two_boxes`` at resolution n):
 an elastic block (2n x 2n x n hexahedra, Q4 slave faces) on a foundation (m x m x n, m ~ 3n,
-master), E = 1000, nu = 0.3 for both, linear law with default K = 50 E, mu = 0.3; step 1
-presses the block top down by 0.005 (1 increment), step 2 slides it by 0.02 along x
-(2 increments, full slip), foundation bottom fixed.  Serial.
+master), E = 1000, nu = 0.3 for both, linear law with CalculiX's K = 50 E and
+lambda = E/2 (``"calculix"``), mu = 0.3; step 1 presses the block top down by 0.005
+(1 increment), step 2 slides it by 0.02 along x (2 increments, full slip), foundation
+bottom fixed.  Serial.
 
 Each configuration runs in its own process (clean peak memory, nothing left in PETSc's
 options database):
@@ -69,7 +70,8 @@ def scene(n: int, contact: bool = True, slide_increments: int = 2):
     from dolfinx_friction.model import BC, Body, ContactPair, Output, Scene, Step
     return Scene(
         mesh=two_boxes_mesh(n), bodies=(Body("block", E, NU), Body("foundation", E, NU)),
-        contacts=(ContactPair("block_bottom", "foundation_top", mu=MU),) if contact else (),
+        contacts=(ContactPair("block_bottom", "foundation_top", mu=MU, K="calculix",
+                              stick_slope="calculix"),) if contact else (),
         steps=(Step("press", increments=1, bcs=(BC("foundation_bottom", (0.0, 0.0, 0.0)),
                                                 BC("block_top", (0.0, 0.0, -PRESS)))),
                Step("slide", increments=slide_increments,

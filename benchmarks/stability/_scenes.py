@@ -253,13 +253,15 @@ def cached_mesh(kind: str, builder, **params) -> Path:
 
 # ---------------------------------------------------------------------------- scenes
 def _contact(case: dict, slave: str, master: str, h: float, E_slave: float, mu: float):
-    """The contact pair of a case: K and the stick slope given as multiples of E_slave / h."""
+    """The contact pair of a case: K and the stick slope given as multiples of E_slave / h;
+    without ``lam`` the stick slope of the maps, CalculiX's E/2 (the default before
+    scene-format version 2)."""
     from dolfinx_friction.model import ContactPair
     k = case.get("k", 10.0)
     lam = case.get("lam")
     pi = case.get("pairing", 8)
     return ContactPair(slave, master, K=k * E_slave / h, mu=case.get("mu", mu),
-                       stick_slope=None if lam is None else lam * E_slave / h,
+                       stick_slope="calculix" if lam is None else lam * E_slave / h,
                        tangent=case.get("tangent", "consistent"),
                        pairing_iterations=1000 if pi in (None, "never", 0) else int(pi))
 

@@ -410,6 +410,10 @@ CASES = [
     Case("stick_slope_negative", ["contact.0.stick_slope", "-1000.0"],
          [("contact.0.stick_slope", -1000.0)]),
     Case("stick_slope_zero", ["contact.0.stick_slope", "0"], [("contact.0.stick_slope", 0)]),
+    Case("K_unknown_string", ['contact.0.K = "calculx"', '"calculix"'],
+         [("contact.0.K", "calculx")]),
+    Case("set_stick_slope_unknown_string", ['contact.0.stick_slope = "stiff"', '"calculix"'],
+         args=["--set", "contact.0.stick_slope=stiff"]),
     Case("degree_three", ["body.0.degree", "3"], [("body.0.degree", 3)]),
     # missing keys and sections
     Case("missing_E", ["body.0.E", "missing"], [("body.0.E", DELETE)]),

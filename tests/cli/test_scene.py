@@ -9,6 +9,7 @@ import copy
 import json
 import math
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -393,6 +394,23 @@ def test_overrides_of_the_contract(tmp_path):
     assert scene.steps[0].bcs[0].u == (0.0, 0.0, None)
 
 
+def test_calculix_penalty_and_stick_slope(tmp_path):
+    """K and stick_slope: a number, or "calculix" (CalculiX's 50 E and E/2; also as a bare
+    --set value); absent, the version-2 defaults 10 E/h and E/h once h is known."""
+    path = write(tmp_path, EXAMPLE)
+    scene = load_scene(path, ['contact.0.K="calculix"', "contact.0.stick_slope=calculix"])
+    pair = scene.contacts[0]
+    assert (pair.K, pair.stick_slope) == ("calculix", "calculix")
+    E = scene.bodies[0].E
+    resolved = pair.resolved(E, spacing=0.25)
+    assert (resolved.K, resolved.stick_slope) == (50 * E, E / 2)
+    default = replace(pair, K=None, stick_slope=None)
+    assert (default.resolved(E).K, default.resolved(E).stick_slope) == (None, None)
+    resolved = default.resolved(E, spacing=0.25)
+    assert (resolved.K, resolved.stick_slope) == (40 * E, 4 * E)
+    assert replace(pair, K=7.0).resolved(E, spacing=0.25).K == 7.0
+
+
 def test_overrides_bare_strings_absent_keys_and_new_tables(tmp_path):
     path = write(tmp_path, EXAMPLE)
     scene = load_scene(path, [
@@ -475,6 +493,11 @@ BAD = [
     ("K-zero", "example", [put("contact.0.K", 0)], ["contact.0.K = 0"]),
     ("sigma_inf-negative", "example", [put("contact.0.sigma_inf", -2.0)], ["contact.0.sigma_inf"]),
     ("stick_slope-zero", "example", [put("contact.0.stick_slope", 0.0)], ["contact.0.stick_slope"]),
+    ("K-unknown-string", "example", [put("contact.0.K", "calculx")],
+     ['contact.0.K = "calculx"', 'a number > 0 or "calculix"', "did you mean 'calculix'"]),
+    ("stick_slope-unknown-string", "example", [put("contact.0.stick_slope", "stiff")],
+     ['contact.0.stick_slope = "stiff"', 'a number > 0 or "calculix"']),
+    ("K-bool", "example", [put("contact.0.K", True)], ["contact.0.K = true", "number"]),
     ("c0-zero", "example", [put("contact.0.c0", 0.0)], ["contact.0.c0"]),
     ("unknown-law", "example", [put("contact.0.law", "exponental")],
      ['contact.0.law = "exponental"', "did you mean 'exponential'"]),

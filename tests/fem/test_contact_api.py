@@ -254,6 +254,13 @@ def test_bad_input_gets_one_clear_line():
         (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, mu=0.3), "give E"),
         (lambda: NodeToSurface(Surface(V, tags, BOTTOM), rigid_plane([0, 0, 0], [0, 0, 1]),
                                E=E), "3 components"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, K="ccx"),
+         "K must be a number or 'calculix'"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=0.3,
+                               stick_slope="stiff"), "stick_slope must be a number"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, mu=0.3, K=1e4,
+                               stick_slope="calculix"), "give E"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=1e307), "default K"),
     ]
     assert rigid_plane([0, 0], [0, 1e-200]).normal == (0.0, 1.0)  # tiny, not zero
     for make, text in cases:
@@ -261,3 +268,30 @@ def test_bad_input_gets_one_clear_line():
             make()
         message = str(info.value)
         assert text in message and "\n" not in message, message
+
+
+@pytest.mark.parametrize("cell", [mesh.CellType.quadrilateral, mesh.CellType.triangle])
+def test_default_penalty_scales_with_the_slave_node_spacing(cell):
+    """K = 10 E/h and lambda = E/h with h the median slave node spacing (the element size of
+    a uniform mesh, on every rank the same); "calculix": 50 E and E/2; numbers as given."""
+    plane = rigid_plane([0, 0], [0, 1])
+    V, tags = block(0.0, 0.0, 1.0, 0.5, 8, 2, cell)  # bottom: 8 faces of length 1/8
+    contact = NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=0.3)
+    h = contact.spacing
+    assert h == pytest.approx(1 / 8, rel=1e-12)
+    assert MPI.COMM_WORLD.allgather(h) == [h] * MPI.COMM_WORLD.size
+    assert contact.law.K == pytest.approx(10 * E / h, rel=1e-12)
+    assert contact.stick_slope == pytest.approx(E / h, rel=1e-12)
+    resolved = contact.resolved()
+    assert resolved == {"law": "linear", "K": contact.law.K, "sigma_inf": E / 70000,
+                        "c0": 1e-3, "mu": 0.3, "stick_slope": contact.stick_slope,
+                        "spacing": h}
+    calculix = NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=0.3, K="calculix",
+                             stick_slope="calculix")
+    assert (calculix.law.K, calculix.stick_slope) == (50 * E, E / 2)
+    given = NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=0.3, K=123.0,
+                          stick_slope=4.5)
+    assert (given.law.K, given.stick_slope) == (123.0, 4.5)
+    finer, ftags = block(0.0, 0.0, 1.0, 0.5, 16, 2, cell)
+    halved = NodeToSurface(Surface(finer, ftags, BOTTOM), plane, E=E, mu=0.3)
+    assert halved.law.K == pytest.approx(2 * contact.law.K, rel=1e-12)

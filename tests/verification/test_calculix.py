@@ -7,8 +7,8 @@ within 1 % in every increment.
 
 The problem: an elastic block (first-order hexahedra or tetrahedra) pressed
 onto an elastic foundation in 2 increments, then slid over it in 4, with the
-linear law at its defaults (K = 50 E, sigma_inf = E/70000, c0 = 1e-3) and
-mu = 0 or 0.3 (lambda = E/2).  The foundation mesh (5 cells per side) and
+linear law at CalculiX's defaults (``K = "calculix"``: 50 E; sigma_inf = E/70000,
+c0 = 1e-3) and mu = 0 or 0.3 (``stick_slope = "calculix"``: lambda = E/2).  The foundation mesh (5 cells per side) and
 the block mesh (4 per side) are chosen so that no slave node starts on an
 edge or a vertex of a master face: there the choice of the master face is
 arbitrary (and differs between the codes), and with its tight convergence
@@ -152,6 +152,7 @@ def _scene_toml(directory: Path, mu: float) -> Path:
         '[[body]]', 'name = "block"', f'E = {E}', f'nu = {NU}',
         '[[body]]', 'name = "foundation"', f'E = {E}', f'nu = {NU}',
         '[[contact]]', 'slave = "block_bottom"', 'master = "foundation_top"', f'mu = {mu}',
+        'K = "calculix"', 'stick_slope = "calculix"',
         '[[step]]', 'name = "press"', 'increments = 2',
         '  [[step.bc]]', '  on = "foundation_bottom"', '  u = [0.0, 0.0, 0.0]',
         '  [[step.bc]]', '  on = "block_top"', '  u = [0.0, 0.0, -0.01]',
