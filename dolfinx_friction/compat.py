@@ -35,6 +35,14 @@ if not NEW_API and DOLFINX_VERSION != (0, 5):  # pragma: no cover
                   f"dolfinx {dolfinx.__version__} is treated like 0.5")
 
 
+def ksp_pc_failed() -> int:
+    """KSP's reason for a preconditioner (factorisation) that failed: ``DIVERGED_PC_FAILED``
+    (PETSc 3.22), ``DIVERGED_PCSETUP_FAILED`` in PETSc 3.18; -11 in both."""
+    from petsc4py import PETSc
+    reasons = PETSc.KSP.ConvergedReason
+    return getattr(reasons, "DIVERGED_PC_FAILED", None) or reasons.DIVERGED_PCSETUP_FAILED
+
+
 def _gmshio():
     """dolfinx's gmsh helpers module (``dolfinx.io.gmshio``; ``dolfinx.io.gmsh`` from 0.10)."""
     try:

@@ -13,6 +13,10 @@ entries INFOG(20)) decide, at least :data:`PAYBACK` back-solves; small 2D proble
 factorise in milliseconds and are factorised every time.  A fresh factorisation is a
 plain direct solve.  Every decision depends on counts, never on timings: runs are
 repeatable.
+A direct solve is checked: a factorisation that failed (a zero pivot) or a solution that
+leaves a linear residual above :data:`SINGULAR` of the right-hand side means a singular
+Jacobian (a body that only the contact held, and the contact opened): the solve fails
+with that reason (:attr:`LinearSolver.failure`), and Newton with it.
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
 default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
 LU factorisation is kept (``reuse`` is ignored for other preconditioners); one by a
@@ -24,6 +28,8 @@ from typing import Optional
 
 from petsc4py import PETSc
 
+from dolfinx_friction import compat
+
 DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 REUSE = {"ksp_type": "gmres", "ksp_gmres_restart": 20, "ksp_rtol": 1e-12, "ksp_atol": 0.0,
          "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}  # max_it: ``max_krylov``
@@ -31,6 +37,9 @@ REUSE = {"ksp_type": "gmres", "ksp_gmres_restart": 20, "ksp_rtol": 1e-12, "ksp_a
 PAUSE = 3
 #: Keep a factorisation only if it costs at least this many back-solves (in flops).
 PAYBACK = 100
+#: A direct solve whose linear residual exceeds this share of the right-hand side's norm
+#: found no solution: the Jacobian is singular (measured on well-posed scenes: <= 1e-11).
+SINGULAR = 1e-6
 
 
 class LinearSolver:
@@ -56,9 +65,11 @@ class LinearSolver:
         self._pays = False  # the last factorisation is worth keeping
         self.factorisations = 0
         self.krylov_iterations = 0
+        #: why the last solve failed ("" if it did not)
+        self.failure = ""
 
     def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> bool:
-        """Solve; returns False when the solver failed."""
+        """Solve; returns False when the solver failed (:attr:`failure` says why)."""
         keep = self.reuse and self._pays and J is self._factored and not self._paused
         self._paused = max(self._paused - 1, 0)
         ok = self._attempt(J, b, x, keep)
@@ -69,6 +80,7 @@ class LinearSolver:
 
     def _attempt(self, J, b, x, keep: bool) -> bool:
         """One solve, with the kept factorisation or a fresh one; whether it converged."""
+        self.failure = ""
         if self.reuse:
             self.ksp.setType("gmres" if keep else "preonly")
             self.ksp.setTolerances(max_it=self.max_krylov)
@@ -81,7 +93,21 @@ class LinearSolver:
             self._pays = self.reuse and (not self._counted or _payback(
                 self.ksp.getPC().getFactorMatrix()) >= PAYBACK)
         self.krylov_iterations += self.ksp.getIterationNumber()
-        return self.ksp.getConvergedReason() > 0
+        reason = self.ksp.getConvergedReason()
+        if reason == compat.ksp_pc_failed():
+            self.failure = "singular Jacobian (the factorisation met a zero pivot)"
+        elif reason > 0 and self.ksp.getType() == "preonly":
+            r = b.duplicate()
+            J.mult(x, r)
+            r.axpy(-1.0, b)
+            residual, scale = r.norm(), b.norm()
+            r.destroy()
+            if not residual <= SINGULAR * scale:
+                self.failure = (f"singular Jacobian (the linear residual is {residual:.2e} of "
+                                f"{scale:.2e}: a body that nothing holds?)")
+        elif reason <= 0:
+            self.failure = f"the linear solver failed ({reason})"
+        return reason > 0 and not self.failure
 
 
 def _payback(F: PETSc.Mat) -> float:

@@ -24,13 +24,15 @@ class NewtonTrace:
     """One Newton solve: ``residuals[k]`` is the residual norm at iterate k; in iteration
     k + 1, ``status_changes[k]`` slave nodes changed their contact status (open, stick,
     slip), ``face_changes[k]`` others only their master face, and the line search halved
-    the step ``backtracks[k]`` times."""
+    the step ``backtracks[k]`` times; ``reason``: why it stopped unconverged, where known
+    (a singular Jacobian)."""
 
     converged: bool = False
     residuals: list[float] = field(default_factory=list)
     status_changes: list[int] = field(default_factory=list)
     face_changes: list[int] = field(default_factory=list)
     backtracks: list[int] = field(default_factory=list)
+    reason: str = ""
 
     @property
     def iterations(self) -> int:
@@ -95,6 +97,7 @@ class Newton:
                 solved = self._solver(problem).solve(A, b, dx)
             if not solved:
                 trace.backtracks.append(0)
+                trace.reason = self.linear.failure
                 break
             x.axpy(-1.0, dx)
             trace.backtracks.append(self._line_search(problem, dx, norm, target)

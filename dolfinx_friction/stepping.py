@@ -128,7 +128,7 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
             c.begin(x, start=x_n)
         trace = newton.solve(problem)
         spent += trace.iterations
-        ok, why = trace.converged, ""
+        ok, why = trace.converged, trace.reason
         if ok and not _finite(problem):
             ok, why = False, NON_FINITE  # never a result: cut back
         if ok and size.level < max_cutbacks and any(c.zone_vanished()
