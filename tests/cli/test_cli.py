@@ -777,6 +777,20 @@ def test_diverging_run(workdir):
     assert increments_of(crows) == [(0, 1)]
 
 
+def test_singular_jacobian_one_line(workdir):
+    """A block that only the floor holds, pulled off it: exit 3, one line naming the step,
+    the increment and the singular Jacobian; the press is kept."""
+    scene = workdir / "case_pulled_off.toml"
+    scene.write_text(toml_dumps(edited(RIGID, [("step.1", {
+        "name": "pull", "max_cutbacks": 1, "bc": [{"on": "top", "u": ["free"] * 3}],
+        "load": [{"on": "top", "traction": [0.0, 0.0, 10.0]}]})])))
+    d = workdir / "pulled_off_out"
+    out = cli("run", scene, "--out", d, "--quiet")
+    assert_one_line_error(out, ["step 1", "increment 1", "singular Jacobian"], EXIT_DIVERGED)
+    _, rows = read_csv(d / "history.csv")
+    assert [(r["step"], r["increment"]) for r in rows] == [("0", "1"), ("0", "2")]
+
+
 def test_rerun_replaces_results(workdir):
     d = workdir / "rerun_out"
     first = cli("run", workdir / "good.toml", "--out", d, "--set", "step.1.increments=3")

@@ -1,6 +1,7 @@
 """No wrong answer reported as a result: a converged increment whose reactions,
 displacements or contact values are not finite is a failed increment (cut back), never
-written.
+written; so is an increment whose Jacobian is singular (a body that only the contact
+held, pulled off it).
 
 In process (serially and under ``mpirun -n 2``): the scene of ``test_cli`` (a block
 pressed and slid on a foundation) is run through :func:`dolfinx_friction.run` while
@@ -25,7 +26,7 @@ from dolfinx_friction.api import run
 from dolfinx_friction.scene import load_scene
 from dolfinx_friction.solver import ConvergenceError
 from tests import meshes
-from tests.cli.test_cli import GOOD, edited, toml_dumps
+from tests.cli.test_cli import GOOD, RIGID, edited, toml_dumps
 
 COMM = MPI.COMM_WORLD
 
@@ -35,16 +36,17 @@ def mesh_dir() -> Path:
     """A directory made on rank 0 and known to every rank, with the mesh."""
     d = Path(COMM.bcast(tempfile.mkdtemp(prefix="dfx_nonfinite_") if COMM.rank == 0 else None))
     meshes.two_boxes(d / "two.msh", n_block=(2, 2, 1), n_foundation=(3, 3, 1))  # collective
+    meshes.block_3d(d / "block.msh", n=(2, 2, 1))
     yield d
     COMM.barrier()
     if COMM.rank == 0:
         shutil.rmtree(d, ignore_errors=True)
 
 
-def _scene(d: Path, name: str, edits=()):
+def _scene(d: Path, name: str, edits=(), base=GOOD):
     path = d / f"{name}.toml"
     if COMM.rank == 0:
-        path.write_text(toml_dumps(edited(GOOD, list(edits))))
+        path.write_text(toml_dumps(edited(base, list(edits))))
     COMM.barrier()
     return load_scene(path)
 
@@ -125,3 +127,21 @@ def test_non_finite_every_time_fails_and_writes_nothing(mesh_dir, poison):
         rows = _rows(out / "history.csv")
         assert [(r["step"], r["increment"]) for r in rows] == [("0", "1")]
         assert {(r["step"], r["increment"]) for r in _rows(out / "contact.csv")} == {("0", "1")}
+
+
+def test_singular_jacobian_fails_with_its_reason(mesh_dir):
+    """A block that only a rigid floor holds (frictional contact), pressed, then its top let
+    go and pulled up: once the contact opens nothing holds the block and the Jacobian is
+    singular.  The pull fails after its cutbacks naming the singular Jacobian; only the
+    press is written (it used to be accepted with the block 1e13 away, exit 0)."""
+    pull = {"name": "pull", "increments": 1, "max_cutbacks": 2,
+            "bc": [{"on": "top", "u": ["free", "free", "free"]}],
+            "load": [{"on": "top", "traction": [0.0, 0.0, 10.0]}]}
+    out = mesh_dir / "pulled_off"
+    scene = _scene(mesh_dir, "pulled_off", [("step.1", pull)], base=RIGID)
+    with pytest.raises(ConvergenceError, match="singular Jacobian") as info:
+        run(scene, out=out, quiet=True)
+    assert "\n" not in str(info.value)
+    if COMM.rank == 0:
+        rows = _rows(out / "history.csv")
+        assert [(r["step"], r["increment"]) for r in rows] == [("0", "1"), ("0", "2")]
