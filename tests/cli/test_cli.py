@@ -777,6 +777,20 @@ def test_diverging_run(workdir):
     assert increments_of(crows) == [(0, 1)]
 
 
+def test_tiny_normal_is_a_direction(workdir):
+    """A rigid plane whose normal is [0, 0, 1e-200] (its norm underflows) is the plane of
+    normal [0, 0, 1]: the same reactions, and nothing on stderr (no numpy warnings)."""
+    results = []
+    for name, normal in (("unit", 1.0), ("tiny", 1e-200)):
+        scene = workdir / f"case_normal_{name}.toml"
+        scene.write_text(toml_dumps(edited(RIGID, [("rigid.0.normal", [0.0, 0.0, normal])])))
+        out = cli("run", scene, "--out", workdir / f"normal_{name}", "--quiet")
+        assert out.status == 0 and out.stderr == "", str(out)
+        results.append(read_csv(workdir / f"normal_{name}" / "history.csv")[1])
+    assert float(results[0][-1]["F_floor_z"]) > 0
+    assert_same_history(results[1], results[0], rtol=1e-12)
+
+
 def test_singular_jacobian_one_line(workdir):
     """A block that only the floor holds, pulled off it: exit 3, one line naming the step,
     the increment and the singular Jacobian; the press is kept."""
