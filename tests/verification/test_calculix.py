@@ -8,10 +8,10 @@ within 1 % in every increment.
 The problem: an elastic block (first-order hexahedra or tetrahedra) pressed
 onto an elastic foundation in 2 increments, then slid over it in 4, with the
 linear law at CalculiX's defaults (``K = "calculix"``: 50 E; sigma_inf = E/70000,
-c0 = 1e-3) and mu = 0 or 0.3 (``stick_slope = "calculix"``: lambda = E/2).  The foundation mesh (5 cells per side) and
-the block mesh (4 per side) are chosen so that no slave node starts on an
-edge or a vertex of a master face: there the choice of the master face is
-arbitrary (and differs between the codes), and with its tight convergence
+c0 = 1e-3) and mu = 0 or 0.3 (``stick_slope = "calculix"``: lambda = E/2).  The
+foundation mesh (5 cells per side) and the block mesh (4 per side) are chosen so
+that no slave node starts on an edge or a vertex of a master face: there the
+choice of the master face is arbitrary (and differs between the codes), and with its tight convergence
 controls CalculiX stalls switching faces at the centre node of a 4-on-4 mesh.
 
 What differs (measured with this mesh, dolfinx_friction as of this test's
