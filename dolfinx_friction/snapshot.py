@@ -1,0 +1,221 @@
+"""The picture of one converged increment from the files a run wrote (``dolfinx-friction
+render``): no solve, no dolfinx; the drawing is :func:`dolfinx_friction.viz.draw`'s, the
+same as :func:`dolfinx_friction.viz.render` makes of a live problem.
+
+What is read:
+
+* ``history.csv``: the converged increments (the picture's step, increment and ``t``) and
+  the translations ``U_<rigid>_*`` of the rigid obstacles;
+* ``fields/step<s>_increment<iiii>/<body>.xdmf`` (+ ``.h5``), through VTK's XDMF reader:
+  each body's mesh, ``displacement``, ``contact_pressure``, ``status`` and ``von_mises``;
+* the scene named in ``summary.json`` (with its recorded ``overrides``), only for the
+  shapes of the rigid obstacles; they are left out (with a logged warning) when it
+  cannot be read.
+
+The slave contact surfaces are not in the field files as groups: they are taken to be the
+boundary facets whose corner nodes all carry a contact element (``status`` >= 0), which
+leaves out facets with a node beyond the master's reach, and the master facet groups are
+not outlined.  Cells are drawn through their corner nodes, as in the live picture.
+"""
+from __future__ import annotations
+
+import logging
+import os
+from pathlib import Path
+from typing import Optional, Union
+
+from dolfinx_friction import viz  # noqa: I001  (pyvista before anything that may load dolfinx)
+import numpy as np
+import pyvista
+
+from dolfinx_friction.results import ResultsError, RunFiles, read_run
+from dolfinx_friction.model import Scene
+from dolfinx_friction.scene import SceneError, load_scene
+
+__all__ = ["choose_increment", "field_folder", "render_files"]
+
+logger = logging.getLogger(__name__)
+
+#: Facets (edges in 2D, faces in 3D) of the linear VTK cells, as corner cycles; the
+#: orientation of 3D faces is set outward from the cell's centroid.
+_FACETS = {5: [[0, 1], [1, 2], [2, 0]],  # triangle
+           9: [[0, 1], [1, 2], [2, 3], [3, 0]],  # quadrilateral
+           10: [[0, 1, 2], [0, 1, 3], [1, 2, 3], [0, 2, 3]],  # tetrahedron
+           12: [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6],
+                [3, 0, 4, 7]]}  # hexahedron
+_GDIM = {5: 2, 9: 2, 10: 3, 12: 3}
+
+
+def choose_increment(run: RunFiles, increment: Optional[int]) -> int:
+    """Row of ``history.csv`` (from 0) of the ``increment``-th converged increment, counted
+    from 1 in history order (negative: from the end; None: the last)."""
+    n = len(run.history)
+    if n == 0:
+        raise ResultsError(f"{run.directory}: no converged increment to draw")
+    if increment is None:
+        return n - 1
+    if 1 <= increment <= n:
+        return increment - 1
+    if -n <= increment <= -1:
+        return n + increment
+    raise ResultsError(f"--increment {increment}: out of range: {run.directory} has {n} "
+                       f"converged increment{'s' if n > 1 else ''} (1 to {n}, or -1 for the "
+                       "last)")
+
+
+def field_folder(run: RunFiles, row: int) -> Path:
+    """``fields/step<s>_increment<iiii>`` of a row of ``history.csv``."""
+    r = run.history[row]
+    return run.directory / "fields" / f"step{int(r['step'])}_increment{int(r['increment']):04d}"
+
+
+def _read_body(path: Path) -> pyvista.UnstructuredGrid:
+    """A body's field file: one grid with all its point and cell arrays."""
+    from vtkmodules.vtkCommonCore import vtkObject
+    vtkObject.GlobalWarningDisplayOff()  # a bad file is reported below, in one line
+    try:
+        blocks = pyvista.read(path)
+    except Exception as exc:  # VTK's reader fails in many ways: one line naming the file
+        raise ResultsError(f"{path}: cannot be read: {exc}") from None
+    finally:
+        vtkObject.GlobalWarningDisplayOn()
+    grids = [b for b in (blocks if isinstance(blocks, pyvista.MultiBlock) else [blocks])
+             if b is not None and b.n_points]
+    if not grids:
+        raise ResultsError(f"{path}: cannot be read (no mesh in it)")
+    grid = grids[0].copy()
+    for other in grids[1:]:  # one grid per function, all on the same mesh
+        for name in other.point_data.keys():
+            grid.point_data[name] = other.point_data[name]
+        for name in other.cell_data.keys():
+            grid.cell_data[name] = other.cell_data[name]
+    for name in ("displacement", "contact_pressure", "status"):
+        if name not in grid.point_data:
+            raise ResultsError(f"{path}: no {name} field in it")
+    return grid
+
+
+def _slave_facets(cells: np.ndarray, kind: int, X: np.ndarray, status: np.ndarray
+                  ) -> np.ndarray:
+    """(n, corners) nodes of the boundary facets whose nodes all have a contact element;
+    3D faces ordered with outward normals."""
+    local = np.array(_FACETS[kind])
+    facets = cells[:, local]  # (cells, facets per cell, corners)
+    owner = np.repeat(np.arange(len(cells)), len(local))
+    facets = facets.reshape(-1, local.shape[1])
+    _, first, count = np.unique(np.sort(facets, axis=1), axis=0, return_index=True,
+                                return_counts=True)
+    boundary = first[count == 1]
+    keep = boundary[(status[facets[boundary]] >= 0).all(axis=1)]
+    facets, owner = facets[keep], owner[keep]
+    if _GDIM[kind] == 3 and len(facets):
+        normal = np.cross(X[facets[:, 1]] - X[facets[:, 0]], X[facets[:, -1]] - X[facets[:, 0]])
+        outward = X[facets].mean(axis=1) - X[cells[owner]].mean(axis=1)
+        inward = np.einsum("ij,ij->i", normal, outward) < 0
+        facets[inward] = facets[inward, ::-1]
+    return facets
+
+
+def _body_data(name: str, grid: pyvista.UnstructuredGrid, warp: float
+               ) -> tuple[int, dict, Optional[dict]]:
+    """``(gdim, body, slave facets or None)`` of one body, as :func:`viz.draw` takes them."""
+    topology, cell_types = viz.linear_cells(np.asarray(grid.cells), np.asarray(grid.celltypes))
+    kind = int(cell_types[0])
+    if kind not in _FACETS or (cell_types != kind).any():
+        raise ResultsError(f"{name}: cells of VTK type {sorted(set(cell_types.tolist()))} "
+                           "cannot be drawn (triangles, quadrilaterals, tetrahedra or "
+                           "hexahedra of one type per body)")
+    X = np.asarray(grid.points, dtype=float)
+    x = X + warp * np.asarray(grid.point_data["displacement"], dtype=float).reshape(len(X), -1)
+    von_mises = grid.cell_data.get("von_mises")
+    body = dict(name=name, topology=topology, cell_types=cell_types, x=x,
+                von_mises=None if von_mises is None else np.asarray(von_mises).ravel())
+    status = np.rint(np.asarray(grid.point_data["status"])).astype(int).ravel()
+    cells = topology.reshape(len(cell_types), -1)[:, 1:]
+    facets = _slave_facets(cells, kind, X, status)
+    if not len(facets):
+        return _GDIM[kind], body, None
+    pressure = np.asarray(grid.point_data["contact_pressure"], dtype=float).ravel()
+    slave = dict(body=name, group=f"{name} contact surface", x=x[facets],
+                 pressure=pressure[facets], code=status[facets] + 1, X=X[facets])
+    return _GDIM[kind], body, slave
+
+
+def _scene(run: RunFiles, rigid: bool) -> Optional[Scene]:
+    """The scene of the run (``summary.json``'s ``scene`` with its ``overrides``), or None;
+    a warning when it is needed for the rigid obstacles (``rigid``) and cannot be read."""
+    summary = run.summary or {}
+    source, overrides = summary.get("scene"), summary.get("overrides") or []
+    if isinstance(overrides, dict):
+        overrides = [f"{key}={value}" for key, value in overrides.items()]
+    try:
+        if not source:
+            raise SceneError("no summary.json naming the scene")
+        return load_scene(Path(source), [str(o) for o in overrides])
+    except SceneError as exc:
+        if rigid:
+            logger.warning("rigid obstacles not drawn: %s", exc)
+        return None
+
+
+def _rigids(scene: Optional[Scene], row: dict, gdim: int, warp: float) -> list[dict]:
+    """The rigid obstacles of the scene, translated as the history row says."""
+    out = []
+    for rigid in scene.rigids if scene is not None else ():
+        try:
+            U = [float(row[f"U_{rigid.name}_{a}"]) for a in "xyz"[:gdim]]
+        except (KeyError, ValueError):
+            continue
+        out.append(dict(rigid=rigid, U=warp * np.pad(U, (0, 3 - gdim))))
+    return out
+
+
+def render_files(directory: Union[str, Path], png_path: Union[str, Path, None] = None,
+                 increment: Optional[int] = None, scalar: str = "contact_pressure",
+                 warp: float = 1.0, body_scalar: Optional[str] = None
+                 ) -> tuple[Path, RunFiles, int]:
+    """Draw one converged increment of the results in ``directory`` into ``png_path``
+    (default ``directory/render_step<s>_increment<iiii>.png``), written whole or not at all.
+
+    ``increment``: as :func:`choose_increment`; ``scalar``, ``warp`` (displacement scale)
+    and ``body_scalar``: as :func:`dolfinx_friction.viz.render`.  Returns the path, the
+    results read and the row of ``history.csv`` drawn.  Raises :class:`ResultsError`.
+    """
+    run = read_run(directory)
+    k = choose_increment(run, increment)
+    folder = field_folder(run, k)
+    files = sorted(folder.glob("*.xdmf")) if folder.is_dir() else []
+    if not files:
+        raise ResultsError(f"{folder}: no field files (a run with output.fields = false "
+                           "cannot be rendered)")
+    scene = _scene(run, rigid=any(c.startswith("U_") for c in run.header))
+    order = {b.name: n for n, b in enumerate(scene.bodies)} if scene is not None else {}
+    files.sort(key=lambda f: order.get(f.stem, len(order)))  # the colours of the live picture
+    gdims, bodies, slaves = set(), [], []
+    for path in files:
+        gdim, body, slave = _body_data(path.stem, _read_body(path), warp)
+        if body_scalar == "von_mises" and body["von_mises"] is None:
+            raise ResultsError(f"{path}: no von_mises field in it")
+        gdims.add(gdim)
+        bodies.append(body)
+        slaves += [slave] if slave is not None else []
+    gdim = max(gdims)
+    row = run.history[k]
+    data = dict(bodies=bodies, slaves=slaves, masters=[],
+                rigids=_rigids(scene, row, gdim, warp))
+    steps = (run.summary or {}).get("steps") or []
+    step = int(row["step"])
+    name = f" ({steps[step]})" if step < len(steps) else ""
+    title = (f"{run.title()}\nstep {step}{name}, increment {int(row['increment'])}, "
+             f"t = {float(row['t']):.4g}")
+    png_path = Path(png_path) if png_path is not None else \
+        run.directory / f"{folder.name.replace('step', 'render_step', 1)}.png"
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    partial = png_path.with_name(f".{png_path.stem}.partial.png")
+    try:
+        viz.draw(data, gdim, partial, scalar=scalar, warp=warp, title=title,
+                 body_scalar=body_scalar)
+        os.replace(partial, png_path)
+    finally:
+        partial.unlink(missing_ok=True)
+    return png_path, run, k
