@@ -521,7 +521,7 @@ def _fit_parallel(pl, lo: np.ndarray, hi: np.ndarray, towards_camera: np.ndarray
 
 def _mean_normal(slaves: list[dict]) -> np.ndarray:
     """Mean outward normal of the closed slave facets (falls back to all facets)."""
-    normals, weights = [], []
+    normals = []
     for s in slaves:
         x = s["x"]
         if x.shape[1] < 3:
