@@ -12,10 +12,13 @@ What is read:
   shapes of the rigid obstacles; they are left out (with a logged warning) when it
   cannot be read.
 
-The slave contact surfaces are not in the field files as groups: they are taken to be the
-boundary facets whose corner nodes all carry a contact element (``status`` >= 0), which
-leaves out facets with a node beyond the master's reach, and the master facet groups are
-not outlined.  Cells are drawn through their corner nodes, as in the live picture.
+The facet groups are not in the field files.  The slave contact surfaces are taken to be
+the boundary facets whose corner nodes all carry a contact element (``status`` >= 0):
+facets with a node beyond the master's reach (no element, ``status`` -1 like a node that
+is no slave node) are drawn as plain body surface, not in the grey of open contact.  The
+master surfaces outlined in the 3D close-up are the boundary facets of the bodies without
+slave facets that face the slave surfaces.  Cells are drawn through their corner nodes, as
+in the live picture.
 """
 from __future__ import annotations
 
@@ -95,20 +98,17 @@ def _read_body(path: Path) -> pyvista.UnstructuredGrid:
     return grid
 
 
-def _slave_facets(cells: np.ndarray, kind: int, X: np.ndarray, status: np.ndarray
-                  ) -> np.ndarray:
-    """(n, corners) nodes of the boundary facets whose nodes all have a contact element;
-    3D faces ordered with outward normals."""
+def _boundary_facets(cells: np.ndarray, kind: int, X: np.ndarray) -> np.ndarray:
+    """(n, corners) nodes of the boundary facets of a mesh (facets of one cell only); 3D
+    faces ordered with outward normals (from the centroid of their cell)."""
     local = np.array(_FACETS[kind])
-    facets = cells[:, local]  # (cells, facets per cell, corners)
+    facets = cells[:, local].reshape(-1, local.shape[1])
     owner = np.repeat(np.arange(len(cells)), len(local))
-    facets = facets.reshape(-1, local.shape[1])
     _, first, count = np.unique(np.sort(facets, axis=1), axis=0, return_index=True,
                                 return_counts=True)
-    boundary = first[count == 1]
-    keep = boundary[(status[facets[boundary]] >= 0).all(axis=1)]
+    keep = first[count == 1]
     facets, owner = facets[keep], owner[keep]
-    if _GDIM[kind] == 3 and len(facets):
+    if _GDIM[kind] == 3:
         normal = np.cross(X[facets[:, 1]] - X[facets[:, 0]], X[facets[:, -1]] - X[facets[:, 0]])
         outward = X[facets].mean(axis=1) - X[cells[owner]].mean(axis=1)
         inward = np.einsum("ij,ij->i", normal, outward) < 0
@@ -117,8 +117,10 @@ def _slave_facets(cells: np.ndarray, kind: int, X: np.ndarray, status: np.ndarra
 
 
 def _body_data(name: str, grid: pyvista.UnstructuredGrid, warp: float
-               ) -> tuple[int, dict, Optional[dict]]:
-    """``(gdim, body, slave facets or None)`` of one body, as :func:`viz.draw` takes them."""
+               ) -> tuple[int, dict, Optional[dict], Optional[dict]]:
+    """``(gdim, body, slave facets, other boundary facets)`` of one body, as
+    :func:`viz.draw` takes them (facets None when there are none).  Slave facets: those
+    whose corner nodes all carry a contact element (``status`` >= 0)."""
     topology, cell_types = viz.linear_cells(np.asarray(grid.cells), np.asarray(grid.celltypes))
     kind = int(cell_types[0])
     if kind not in _FACETS or (cell_types != kind).any():
@@ -131,14 +133,28 @@ def _body_data(name: str, grid: pyvista.UnstructuredGrid, warp: float
     body = dict(name=name, topology=topology, cell_types=cell_types, x=x,
                 von_mises=None if von_mises is None else np.asarray(von_mises).ravel())
     status = np.rint(np.asarray(grid.point_data["status"])).astype(int).ravel()
-    cells = topology.reshape(len(cell_types), -1)[:, 1:]
-    facets = _slave_facets(cells, kind, X, status)
-    if not len(facets):
-        return _GDIM[kind], body, None
+    facets = _boundary_facets(topology.reshape(len(cell_types), -1)[:, 1:], kind, X)
+    slave = (status[facets] >= 0).all(axis=1)
     pressure = np.asarray(grid.point_data["contact_pressure"], dtype=float).ravel()
-    slave = dict(body=name, group=f"{name} contact surface", x=x[facets],
-                 pressure=pressure[facets], code=status[facets] + 1, X=X[facets])
-    return _GDIM[kind], body, slave
+    s, m = facets[slave], facets[~slave]
+    slaves = dict(body=name, group=f"{name} contact surface", x=x[s], pressure=pressure[s],
+                  code=status[s] + 1, X=X[s]) if len(s) else None
+    others = dict(body=name, group=f"{name} boundary", x=x[m]) if len(m) else None
+    return _GDIM[kind], body, slaves, others
+
+
+def _facing(others: list[dict], slaves: list[dict]) -> list[dict]:
+    """The boundary facets (3D) that face the slave surfaces (outward normal within 60
+    degrees of minus their mean normal): the master surfaces, outlined in the close-up."""
+    n = viz.mean_normal(slaves)
+    out = []
+    for facets in others:
+        x = facets["x"]
+        m = np.cross(x[:, 1] - x[:, 0], x[:, -1] - x[:, 0])
+        facing = m @ n < -0.5 * np.linalg.norm(m, axis=1)
+        if facing.any():
+            out.append(dict(facets, x=x[facing]))
+    return out
 
 
 def _scene(run: RunFiles, rigid: bool) -> Optional[Scene]:
@@ -191,17 +207,19 @@ def render_files(directory: Union[str, Path], png_path: Union[str, Path, None] =
     scene = _scene(run, rigid=any(c.startswith("U_") for c in run.header))
     order = {b.name: n for n, b in enumerate(scene.bodies)} if scene is not None else {}
     files.sort(key=lambda f: order.get(f.stem, len(order)))  # the colours of the live picture
-    gdims, bodies, slaves = set(), [], []
+    gdims, bodies, slaves, others = set(), [], [], []
     for path in files:
-        gdim, body, slave = _body_data(path.stem, _read_body(path), warp)
+        gdim, body, slave, other = _body_data(path.stem, _read_body(path), warp)
         if body_scalar == "von_mises" and body["von_mises"] is None:
             raise ResultsError(f"{path}: no von_mises field in it")
         gdims.add(gdim)
         bodies.append(body)
         slaves += [slave] if slave is not None else []
+        others += [other] if other is not None and slave is None else []
     gdim = max(gdims)
     row = run.history[k]
-    data = dict(bodies=bodies, slaves=slaves, masters=[],
+    data = dict(bodies=bodies, slaves=slaves,
+                masters=_facing(others, slaves) if gdim == 3 and slaves else [],
                 rigids=_rigids(scene, row, gdim, warp))
     steps = (run.summary or {}).get("steps") or []
     step = int(row["step"])

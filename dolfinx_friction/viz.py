@@ -463,7 +463,7 @@ def draw(data: dict, gdim: int, png_path: Union[str, Path], scalar: str = "conta
             _fit_parallel(pl, view_lo, view_hi, np.array([0.0, 0.0, 1.0]),
                           np.array([0.0, 1.0, 0.0]), aspect)
         elif close_up:
-            n = _mean_normal(data["slaves"])
+            n = mean_normal(data["slaves"])
             up = np.array([0.0, 1.0, 0.0]) if abs(n[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
             _fit_parallel(pl, view_lo, view_hi, n, up, aspect)
         else:
@@ -519,7 +519,7 @@ def _fit_parallel(pl, lo: np.ndarray, hi: np.ndarray, towards_camera: np.ndarray
     pl.camera.parallel_scale = 0.5 * max(1.3 * h, 1.1 * w / aspect, 1e-30)
 
 
-def _mean_normal(slaves: list[dict]) -> np.ndarray:
+def mean_normal(slaves: list[dict]) -> np.ndarray:
     """Mean outward normal of the closed slave facets (falls back to all facets)."""
     normals = []
     for s in slaves:
