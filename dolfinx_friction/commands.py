@@ -94,6 +94,9 @@ def add_parsers(sub) -> None:
                         help="colour of the contact surfaces (default: pressure)")
     render.add_argument("--warp", type=_scale, default=1.0,
                         help="scale of the displacements (default 1)")
+    render.add_argument("--amplify", choices=("total", "deformation"), default="total",
+                        help="what --warp scales: the whole displacement (default) or only "
+                             "what differs from each body's mean translation")
     render.add_argument("--von-mises", action="store_true",
                         help="colour the bodies by their von Mises stress")
     render.add_argument("--debug", **hidden)
@@ -188,6 +191,7 @@ def _render(args) -> int:
     path, run, row = render_files(args.directory, args.output, args.increment,
                                   scalar="status" if args.scalar == "status"
                                   else "contact_pressure", warp=args.warp,
+                                  amplify=args.amplify,
                                   body_scalar="von_mises" if args.von_mises else None)
     print(f"picture: {path}")
     return _incomplete(run, f"drew converged increment {row + 1} of {len(run.history)} "

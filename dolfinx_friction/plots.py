@@ -65,7 +65,7 @@ def _state(run: RunFiles) -> str:
 def plot_history(run: RunFiles, path: Path) -> Path:
     """Three charts of a run's history against ``t`` into ``path``."""
     t = np.array(run.column("t"))
-    fig = Figure(figsize=(8.0, 9.0), layout="constrained")
+    fig = Figure(figsize=(9.5, 9.0), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
     fig.suptitle(f"{run.title()}\n{_state(run)}", fontsize=10)
     forces = _nonzero({c: np.array(run.column(c)) for c in run.force_columns()
@@ -75,7 +75,7 @@ def plot_history(run: RunFiles, path: Path) -> Path:
     axes[0].set_ylabel("force")
     axes[0].set_title("reactions (R) and forces on rigid obstacles (F)", fontsize=9)
     if forces:
-        axes[0].legend(fontsize=8, loc="best")
+        axes[0].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     axes[1].bar(t, run.column("newton_iterations"),
                 width=0.6 * float(np.min(np.diff(t))) if len(t) > 1 else 0.1, color="#4c72b0")
     axes[1].set_ylabel("Newton iterations")
@@ -86,7 +86,7 @@ def plot_history(run: RunFiles, path: Path) -> Path:
     axes[2].plot(t, run.column("slipping"), "s-", ms=3, label="slipping")
     axes[2].set_ylabel("slave nodes")
     axes[2].set_xlabel("pseudo-time t (step index + step time)")
-    axes[2].legend(fontsize=8, loc="best")
+    axes[2].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     steps = (run.summary or {}).get("steps") or []
     for ax in axes:
         ax.grid(alpha=0.3)
@@ -101,6 +101,16 @@ def plot_history(run: RunFiles, path: Path) -> Path:
         axes[0].text(0.5, 0.5, "no converged increment", transform=axes[0].transAxes,
                      ha="center")
     return _save(fig, path)
+
+
+def _flat_as_flat(ax, values: np.ndarray) -> None:
+    """A value that does not change (to 1e-6 relative) is drawn as a flat line, not as its
+    round-off magnified to the height of the chart."""
+    values = values[np.isfinite(values)]
+    if values.size and np.ptp(values) <= 1e-6 * np.abs(values).max():
+        middle, half = float(values.mean()), 0.05 * float(np.abs(values).max()) or 1.0
+        ax.set_ylim(middle - half, middle + half)
+        ax.ticklabel_format(axis="y", useOffset=False)
 
 
 def _numbers(values: Sequence[str]) -> Union[np.ndarray, None]:
@@ -145,6 +155,8 @@ def plot_sweep(directory: Path, path: Path) -> tuple[Path, int]:
         for row_k in range(n_rows):
             ax = axes[row_k, col]
             ax.grid(alpha=0.3)
+            if row_k < len(shown):
+                _flat_as_flat(ax, values[shown[row_k]])
             if numeric is None:
                 ax.set_xticks(range(len(order)), order, rotation=20, fontsize=8)
             if row_k < len(shown):

@@ -116,7 +116,7 @@ def _boundary_facets(cells: np.ndarray, kind: int, X: np.ndarray) -> np.ndarray:
     return facets
 
 
-def _body_data(name: str, grid: pyvista.UnstructuredGrid, warp: float
+def _body_data(name: str, grid: pyvista.UnstructuredGrid, warp: float, amplify: str
                ) -> tuple[int, dict, Optional[dict], Optional[dict]]:
     """``(gdim, body, slave facets, other boundary facets)`` of one body, as
     :func:`viz.draw` takes them (facets None when there are none).  Slave facets: those
@@ -128,7 +128,9 @@ def _body_data(name: str, grid: pyvista.UnstructuredGrid, warp: float
                            "cannot be drawn (triangles, quadrilaterals, tetrahedra or "
                            "hexahedra of one type per body)")
     X = np.asarray(grid.points, dtype=float)
-    x = X + warp * np.asarray(grid.point_data["displacement"], dtype=float).reshape(len(X), -1)
+    u = np.asarray(grid.point_data["displacement"], dtype=float).reshape(len(X), -1)
+    mean = u.mean(axis=0) if amplify == "deformation" else np.zeros(3)
+    x = X + mean + warp * (u - mean)
     von_mises = grid.cell_data.get("von_mises")
     body = dict(name=name, topology=topology, cell_types=cell_types, x=x,
                 von_mises=None if von_mises is None else np.asarray(von_mises).ravel())
@@ -188,13 +190,14 @@ def _rigids(scene: Optional[Scene], row: dict, gdim: int, warp: float) -> list[d
 
 def render_files(directory: Union[str, Path], png_path: Union[str, Path, None] = None,
                  increment: Optional[int] = None, scalar: str = "contact_pressure",
-                 warp: float = 1.0, body_scalar: Optional[str] = None
+                 warp: float = 1.0, amplify: str = "total", body_scalar: Optional[str] = None
                  ) -> tuple[Path, RunFiles, int]:
     """Draw one converged increment of the results in ``directory`` into ``png_path``
     (default ``directory/render_step<s>_increment<iiii>.png``), written whole or not at all.
 
-    ``increment``: as :func:`choose_increment`; ``scalar``, ``warp`` (displacement scale)
-    and ``body_scalar``: as :func:`dolfinx_friction.viz.render`.  Returns the path, the
+    ``increment``: as :func:`choose_increment`; ``scalar``, ``warp`` (displacement scale),
+    ``amplify`` and ``body_scalar``: as :func:`dolfinx_friction.viz.render` (the mean
+    translation of a body is the mean displacement of its nodes).  Returns the path, the
     results read and the row of ``history.csv`` drawn.  Raises :class:`ResultsError`.
     """
     run = read_run(directory)
@@ -209,7 +212,7 @@ def render_files(directory: Union[str, Path], png_path: Union[str, Path, None] =
     files.sort(key=lambda f: order.get(f.stem, len(order)))  # the colours of the live picture
     gdims, bodies, slaves, others = set(), [], [], []
     for path in files:
-        gdim, body, slave, other = _body_data(path.stem, _read_body(path), warp)
+        gdim, body, slave, other = _body_data(path.stem, _read_body(path), warp, amplify)
         if body_scalar == "von_mises" and body["von_mises"] is None:
             raise ResultsError(f"{path}: no von_mises field in it")
         gdims.add(gdim)
@@ -220,7 +223,7 @@ def render_files(directory: Union[str, Path], png_path: Union[str, Path, None] =
     row = run.history[k]
     data = dict(bodies=bodies, slaves=slaves,
                 masters=_facing(others, slaves) if gdim == 3 and slaves else [],
-                rigids=_rigids(scene, row, gdim, warp))
+                rigids=_rigids(scene, row, gdim, warp if amplify == "total" else 1.0))
     steps = (run.summary or {}).get("steps") or []
     step = int(row["step"])
     name = f" ({steps[step]})" if step < len(steps) else ""
@@ -231,7 +234,7 @@ def render_files(directory: Union[str, Path], png_path: Union[str, Path, None] =
     png_path.parent.mkdir(parents=True, exist_ok=True)
     partial = png_path.with_name(f".{png_path.stem}.partial.png")
     try:
-        viz.draw(data, gdim, partial, scalar=scalar, warp=warp, title=title,
+        viz.draw(data, gdim, partial, scalar=scalar, warp=warp, amplify=amplify, title=title,
                  body_scalar=body_scalar)
         os.replace(partial, png_path)
     finally:
