@@ -114,6 +114,7 @@ def _mpi_ranks() -> int:
 
 
 def _interrupt(signum: int, frame) -> None:
+    """SIGINT / SIGTERM: the sweep stops its running points and ends (130 / 143)."""
     raise Interrupted(signum)
 
 
@@ -142,8 +143,9 @@ def _sweep(args) -> int:
         print(f"[{len(ended)}/{len(points)}] {result.point.label}: {state} "
               f"({result.wall:.1f} s)", flush=True)
 
-    if threading.current_thread() is threading.main_thread():  # SIGTERM stops the runs too
-        signal.signal(signal.SIGTERM, _interrupt)
+    if threading.current_thread() is threading.main_thread():  # (even where SIG_IGN came in)
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, _interrupt)
     try:
         results = run_sweep(args.scene, points, directory, args.jobs, report)
     except (KeyboardInterrupt, Interrupted) as exc:

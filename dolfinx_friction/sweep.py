@@ -217,6 +217,8 @@ class _Runner:
         if proc.returncode != 0:
             reason = lines[-1] if lines else f"killed by signal {-proc.returncode}" \
                 if proc.returncode < 0 else f"exit status {proc.returncode}"
+            if self.stopped:  # (the run may have been killed before it could say so)
+                reason = f"stopped with the interrupted sweep ({reason})"
         return PointResult(point, proc.returncode, reason, time.perf_counter() - start)
 
     def stop(self) -> None:

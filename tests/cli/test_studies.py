@@ -251,3 +251,30 @@ def test_killed_run_draws_what_is_there(can_render, fields_run, workdir):
     assert_png(d / "render_step1_increment0001.png")
     assert_one_line_error(cli("plot", d), ["incomplete", "2 converged increments"])
     assert_png(d / "history.png")
+
+
+def test_sweep_interrupted_keeps_a_whole_table(workdir):
+    """Ctrl-C (SIGINT to the process group, as a terminal sends it) after the first point:
+    exit 130, one line, sweep.csv whole with the points that ended (interrupted ones too)."""
+    import os
+    import signal
+    import time
+    d = workdir / "interrupted"
+    proc = subprocess.Popen([sys.executable, "-m", "dolfinx_friction", "sweep",
+                             str(workdir / "swept.toml"), "--set", "contact.0.mu=0.1,0.2,0.3",
+                             "--set", "step.1.increments=3,50", "-j", "2", "--out", str(d),
+                             "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=cli_env(), start_new_session=True)
+    deadline = time.monotonic() + 120
+    while not (d / "sweep.csv").exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=120)
+    out = Outcome(proc.args, proc.returncode, stdout, stderr)
+    assert_one_line_error(out, ["sweep interrupted", "of 6 points ended", "sweep.csv"], 130)
+    header, rows = read_csv(d / "sweep.csv")
+    assert 1 <= len(rows) < 6 and rows[0]["converged"] == "true"
+    assert [int(r["point"]) for r in rows] == sorted(int(r["point"]) for r in rows)
+    for row in rows[1:]:
+        assert row["converged"] == "true" or "interrupted" in row["reason"]
+    assert not [p for p in d.iterdir() if p.name.startswith(".")]
