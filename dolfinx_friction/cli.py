@@ -1,4 +1,5 @@
-"""``dolfinx-friction run|check``: the command line of scene-format.md."""
+"""``dolfinx-friction run|check|sweep|plot|render``: the command line of scene-format.md
+(sweep, plot and render: :mod:`dolfinx_friction.commands`)."""
 from __future__ import annotations
 
 import _thread
@@ -12,6 +13,7 @@ import warnings
 from pathlib import Path
 from typing import Optional, Sequence
 
+from dolfinx_friction import commands
 from dolfinx_friction.errors import (EXIT_INPUT, EXIT_INTERNAL, EXIT_SIGNAL, Interrupted,
                                      OutputError, classify, interruption)
 from dolfinx_friction.inputs import file_fault
@@ -45,6 +47,7 @@ def _parser() -> argparse.ArgumentParser:
                        metavar="KEY=VALUE")
     check.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                        help=argparse.SUPPRESS)
+    commands.add_parsers(sub)  # sweep, plot, render
     return parser
 
 
@@ -167,6 +170,8 @@ def _install_signal_handlers() -> None:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     args = _parser().parse_args(argv)
     _quiet_libraries(args.debug)
+    if args.command in commands.COMMANDS:
+        return commands.main(args)
     _install_signal_handlers()
     try:
         reason = file_fault(args.scene)

@@ -50,6 +50,7 @@ from dolfinx_friction import compat
 from dolfinx_friction.contact.element import STATUS_NAMES
 from dolfinx_friction.errors import OutputError
 from dolfinx_friction.problem import ContactProblem
+from dolfinx_friction.results import write_atomic as _write_atomic
 from dolfinx_friction.solver import Increment, RunSummary
 
 OUR_FILES = ("history.csv", "contact.csv", "summary.json")
@@ -95,18 +96,6 @@ def _truncate(path: Path, size: int) -> None:
     with open(path, "rb+") as f:
         f.truncate(size)
         os.fsync(f.fileno())
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    try:
-        tmp.write_text(text)
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except OSError:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def _collective(comm, error: Optional[str], reduce: bool = False) -> None:

@@ -16,7 +16,12 @@ Two panels by default:
 Import order: VTK aborts with ``std::bad_alloc`` if it is loaded after
 dolfinx in the same process.  Import this module (or ``pyvista``) *before*
 ``dolfinx`` or ``dolfinx_friction.api``; this module imports pyvista at import
-time and dolfinx only inside functions.  Rendering is off-screen.
+time and dolfinx only inside functions.  Rendering is off-screen (without an X server
+through VTK's EGL window, ``VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow``, set at import
+unless it is set already or ``DISPLAY`` is).
+
+:func:`draw` makes the same picture from plain arrays: ``dolfinx-friction render``
+(:mod:`dolfinx_friction.snapshot`) feeds it from the files that a run wrote.
 
 Parallel runs: :func:`render` is collective.  Every rank extracts its local
 cells and slave facets (ghost values are updated first, so nodes shared by
@@ -30,11 +35,15 @@ through their corner nodes only (P1 interpolation of the displacement).
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Optional, Sequence, Union
 
-import numpy as np
-import pyvista
+if "DISPLAY" not in os.environ:  # off-screen pictures without an X server (VTK's own EGL)
+    os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+import numpy as np  # noqa: E402
+import pyvista  # noqa: E402
 
 pyvista.OFF_SCREEN = True
 
@@ -62,7 +71,7 @@ _LINEAR = {69: (5, 3), 70: (9, 4), 71: (10, 4), 72: (12, 8),  # Lagrange cells
            22: (5, 3), 23: (9, 4), 28: (9, 4), 24: (10, 4), 25: (12, 8), 29: (12, 8)}
 
 
-def _linear_cells(topology: np.ndarray, cell_types: np.ndarray):
+def linear_cells(topology: np.ndarray, cell_types: np.ndarray):
     """Corner-only (P1) cells of a higher-order VTK cell array (one cell type per mesh)."""
     topology, cell_types = np.asarray(topology), np.asarray(cell_types)
     if len(cell_types) == 0 or int(cell_types[0]) not in _LINEAR:
@@ -142,7 +151,7 @@ def _local_pieces(problem, warp: float, amplify: str) -> dict:
     master_groups = {c.master for c in problem.scene.contacts
                      if problem.scene.rigid(c.master) is None}
     for field in problem.fields:
-        topology, cell_types = _linear_cells(*vtk_mesh(field.V)[:2])
+        topology, cell_types = linear_cells(*vtk_mesh(field.V)[:2])
         u = field.u.x.array.reshape(-1, d)
         if amplify == "deformation":  # scale only what differs from the mean translation
             owned = u[: field.n_owned]
@@ -318,8 +327,32 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
     pieces = comm.gather(_local_pieces(problem, warp, amplify), root=0)
     if comm.rank != 0:
         return None
-    data = _merge(pieces)
-    gdim = problem.gdim
+    return draw(_merge(pieces), problem.gdim, png_path, scalar=scalar, warp=warp,
+                amplify=amplify, panels=panels, title=title, window_size=window_size,
+                show_edges=show_edges, contact_margin=contact_margin, clim=clim, view=view,
+                body_scalar=body_scalar)
+
+
+def draw(data: dict, gdim: int, png_path: Union[str, Path], scalar: str = "contact_pressure",
+         warp: float = 1.0, amplify: str = "total", panels: Optional[Sequence[str]] = None,
+         title: Optional[str] = None, window_size: Optional[tuple[int, int]] = None,
+         show_edges: bool = True, contact_margin: float = 0.75,
+         clim: Optional[tuple[float, float]] = None, view: Optional[Sequence[float]] = None,
+         body_scalar: Optional[str] = None) -> Path:
+    """Draw the picture of :func:`render` from plain arrays into ``png_path`` (one process).
+
+    ``data``: ``bodies`` (per body: ``name``, VTK ``topology`` and ``cell_types`` of
+    corner-node cells, deformed point coordinates ``x`` (n, 3), ``von_mises`` per cell),
+    ``slaves`` (per slave facet group: ``body``, ``group``, deformed corner coordinates
+    ``x`` (n_facets, corners, 3), nodal ``pressure`` and status ``code`` (n_facets,
+    corners): 1 open or without element, 2 stick, 3 slip; 3D facets with outward
+    normals), ``masters`` (per master facet group: ``body``, ``group``, ``x``; may be
+    empty) and ``rigids`` (per obstacle: the :class:`~dolfinx_friction.model.Rigid` and
+    its drawn translation ``U`` (3,) or None).  ``warp`` and ``amplify`` only label the
+    picture here (``x`` and ``U`` are already scaled); the other arguments as in
+    :func:`render`.  This is what :func:`render` draws for a live problem and what
+    ``dolfinx-friction render`` draws from the files of a run.
+    """
     png_path = Path(png_path)
     png_path.parent.mkdir(parents=True, exist_ok=True)
 
@@ -430,7 +463,7 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
             _fit_parallel(pl, view_lo, view_hi, np.array([0.0, 0.0, 1.0]),
                           np.array([0.0, 1.0, 0.0]), aspect)
         elif close_up:
-            n = _mean_normal(data["slaves"])
+            n = mean_normal(data["slaves"])
             up = np.array([0.0, 1.0, 0.0]) if abs(n[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
             _fit_parallel(pl, view_lo, view_hi, n, up, aspect)
         else:
@@ -486,9 +519,9 @@ def _fit_parallel(pl, lo: np.ndarray, hi: np.ndarray, towards_camera: np.ndarray
     pl.camera.parallel_scale = 0.5 * max(1.3 * h, 1.1 * w / aspect, 1e-30)
 
 
-def _mean_normal(slaves: list[dict]) -> np.ndarray:
+def mean_normal(slaves: list[dict]) -> np.ndarray:
     """Mean outward normal of the closed slave facets (falls back to all facets)."""
-    normals, weights = [], []
+    normals = []
     for s in slaves:
         x = s["x"]
         if x.shape[1] < 3:

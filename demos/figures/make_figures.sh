@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# The charts and pictures of demos/figures/, made by the command line alone
+# (run, sweep, plot, render) from demo runs whose results go to a temporary folder.
+# About 2 minutes on 2 cores.  PYTHON overrides the interpreter (default: .venv's).
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+cd "$ROOT"
+PYTHON="${PYTHON:-$ROOT/.venv/bin/python}"
+FIG=demos/figures
+OUT="$(mktemp -d "${TMPDIR:-/tmp}/dolfinx_friction-figures.XXXXXX")"
+trap 'rm -rf "$OUT"' EXIT
+df() { "$PYTHON" -m dolfinx_friction "$@"; }
+
+# the default scene: history chart and pictures from its files
+df run demos/sliding_block.toml --out "$OUT/sliding_block" --quiet
+df plot "$OUT/sliding_block" -o "$FIG/sliding_block_history.png"
+df render "$OUT/sliding_block" --warp 50 --amplify deformation \
+    -o "$FIG/sliding_block_pressure.png"
+df render "$OUT/sliding_block" --increment 1 --scalar status --warp 50 --amplify deformation \
+    -o "$FIG/sliding_block_status_press.png"
+
+# a friction sweep of the incline: the push force against mu
+df sweep demos/incline.toml --set contact.0.mu=0.1,0.2,0.3,0.4,0.5 -j 2 \
+    --out "$OUT/incline_sweep" --quiet
+cp "$OUT/incline_sweep/sweep.csv" "$FIG/incline_mu_sweep.csv"
+df plot "$OUT/incline_sweep" -o "$FIG/incline_mu_sweep.png"
+df plot "$OUT/incline_sweep/contact.0.mu=0.3" -o "$FIG/incline_mu0.3_history.png"
+df render "$OUT/incline_sweep/contact.0.mu=0.3" --warp 5 --scalar status \
+    -o "$FIG/incline_mu0.3_status.png"
