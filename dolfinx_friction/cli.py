@@ -12,6 +12,7 @@ import warnings
 from pathlib import Path
 from typing import Optional, Sequence
 
+from dolfinx_friction import __version__
 from dolfinx_friction.errors import (EXIT_INPUT, EXIT_INTERNAL, EXIT_SIGNAL, Interrupted,
                                      OutputError, classify, interruption)
 from dolfinx_friction.inputs import file_fault
@@ -30,6 +31,7 @@ def _parser() -> argparse.ArgumentParser:
                      description="Node-to-surface penalty contact with Coulomb friction "
                                  "(CalculiX scheme) on Gmsh scenes, solved with DOLFINx/PETSc.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
+    parser.add_argument("--version", action="version", version=f"dolfinx-friction {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     run = sub.add_parser("run", help="solve a scene and write its results")
     run.add_argument("scene", type=Path)
