@@ -84,9 +84,15 @@ def _check(args, scene) -> None:
 
 
 def _run(args, scene) -> None:
-    from dolfinx_friction.api import run
-    result = run(scene, out=args.out, quiet=args.quiet)
     from mpi4py import MPI
+    from dolfinx_friction.api import run
+    from dolfinx_friction.progress import Progress
+    progress = Progress() if MPI.COMM_WORLD.rank == 0 and not args.quiet else None
+    try:
+        result = run(scene, out=args.out, progress=progress)
+    finally:
+        if progress is not None:
+            progress.close()
     if MPI.COMM_WORLD.rank == 0 and not args.quiet:
         s = result.summary
         print(f"done: {s.increments} increments, {s.newton_iterations} Newton iterations, "
@@ -124,6 +130,28 @@ def _quiet_libraries(debug: bool) -> None:
     handler.setLevel(logging.INFO if debug else logging.WARNING)
     handler.setFormatter(logging.Formatter("%(levelname)s:%(name)s:%(message)s"))
     root.addHandler(handler)
+
+
+class _NoticeFormatter(logging.Formatter):
+    def format(self, record: logging.LogRecord) -> str:
+        text = record.getMessage()
+        return text if record.levelno < logging.WARNING else \
+            f"dolfinx-friction: {record.levelname.lower()}: {text}"
+
+
+def _show_notices(quiet: bool) -> None:
+    """The package's log records as the command line's lines on stderr (the library logs
+    from rank 0 only): warnings as "dolfinx-friction: warning: ...", notices (a rerun
+    replacing results) as they are, unless ``--quiet``."""
+    logger = logging.getLogger("dolfinx_friction")
+    for old in [h for h in logger.handlers if isinstance(h.formatter, _NoticeFormatter)]:
+        logger.removeHandler(old)  # main() called again in this process
+    handler = logging.StreamHandler()
+    handler.setLevel(logging.WARNING if quiet else logging.INFO)
+    handler.setFormatter(_NoticeFormatter())
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    logger.propagate = False
 
 
 def _on_signal(signum: int, frame) -> None:
@@ -169,6 +197,7 @@ def _install_signal_handlers() -> None:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     args = _parser().parse_args(argv)
     _quiet_libraries(args.debug)
+    _show_notices(getattr(args, "quiet", False))
     _install_signal_handlers()
     try:
         reason = file_fault(args.scene)

@@ -42,9 +42,9 @@ from __future__ import annotations
 import errno
 import hashlib
 import json
+import logging
 import os
 import shutil
-import sys
 from pathlib import Path
 from typing import Optional
 
@@ -57,6 +57,7 @@ from dolfinx_friction.errors import OutputError
 from dolfinx_friction.problem import ContactProblem
 from dolfinx_friction.solver import Increment, RunSummary
 
+log = logging.getLogger(__name__)
 OUR_FILES = ("history.csv", "contact.csv", "summary.json")
 AXES = "xyz"
 
@@ -149,10 +150,10 @@ class ResultWriter:
     """Writes the outputs of one run of a :class:`ContactProblem` into ``directory``."""
 
     def __init__(self, problem: ContactProblem, reaction_groups: list[str], directory: Path,
-                 fields: bool = True, contact_table: bool = True, quiet: bool = False):
+                 fields: bool = True, contact_table: bool = True):
         self.problem, self.comm = problem, problem.comm
         self.dir = Path(directory)
-        self.fields, self.contact_table, self.quiet = fields, contact_table, quiet
+        self.fields, self.contact_table = fields, contact_table
         self.rank0 = self.comm.rank == 0
         d = problem.gdim
         self._prepare_directory()
@@ -193,9 +194,8 @@ class ResultWriter:
                 old = [self.dir / f for f in OUR_FILES if (self.dir / f).exists()]
                 if (self.dir / "fields").exists():
                     old.append(self.dir / "fields")
-                if old and not self.quiet:
-                    print(f"overwriting the results of an earlier run in {self.dir}",
-                          file=sys.stderr)
+                if old:
+                    log.info("overwriting the results of an earlier run in %s", self.dir)
                 for path in old:
                     shutil.rmtree(path) if path.is_dir() else path.unlink()
                 probe = self.dir / ".write_test"
@@ -258,12 +258,6 @@ class ResultWriter:
             except OSError as exc:
                 error = _fault(self.dir / "history.csv", exc)
         _collective(self.comm, error)
-        if self.rank0:
-            if not self.quiet:
-                print(f"step {inc.step} ({inc.step_name}) increment {inc.increment}: "
-                      f"t = {inc.t:.4f}, {inc.iterations} Newton iterations, residual "
-                      f"{inc.residual:.2e}, {inc.active} in contact, {inc.slipping} slipping",
-                      flush=True)
 
     def _contact_rows(self, inc: Increment) -> None:
         blocks = []
