@@ -13,6 +13,7 @@ from dolfinx_friction.errors import interruption
 from dolfinx_friction.model import Scene
 from dolfinx_friction.output import ResultWriter
 from dolfinx_friction.problem import ContactProblem
+from dolfinx_friction.provenance import provenance
 from dolfinx_friction.scene import default_output_dir, load_scene
 from dolfinx_friction.solver import ConvergenceError, Increment, RunSummary, Solver
 
@@ -103,6 +104,12 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         if progress is not None:
             progress(inc)
 
+    def extra() -> dict:  # summary.json beyond the counts: what was run, and the warnings
+        if comm.rank != 0:
+            return {}
+        return {**provenance(problem, solver.reaction_groups(), solver.linear),
+                "warnings": list(warnings.values())}
+
     try:
         summary = solver.run(record)
     except ConvergenceError:
@@ -110,7 +117,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         if writer is not None:
             interruption.writing = True  # (a signal now: the failure is still reported)
             try:
-                writer.summary(solver.summary, {"warnings": list(warnings.values())})
+                writer.summary(solver.summary, extra())
             finally:
                 interruption.writing = False
         raise
@@ -118,7 +125,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     if writer is not None:
         interruption.writing = True  # all converged: a signal now only changes the exit status
         try:
-            writer.summary(summary, {"warnings": list(warnings.values())})
+            writer.summary(summary, extra())
         finally:
             interruption.writing = False
     return RunResult(problem, summary, increments, directory if write else None)

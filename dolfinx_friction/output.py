@@ -40,7 +40,6 @@ dolfinx aborts the process when HDF5 fails to close a file on a full disk.
 from __future__ import annotations
 
 import errno
-import hashlib
 import json
 import logging
 import os
@@ -55,6 +54,7 @@ from dolfinx_friction import compat, time_series
 from dolfinx_friction.contact.element import STATUS_NAMES
 from dolfinx_friction.errors import OutputError
 from dolfinx_friction.problem import ContactProblem
+from dolfinx_friction.provenance import file_sha256
 from dolfinx_friction.solver import Increment, RunSummary
 
 log = logging.getLogger(__name__)
@@ -301,9 +301,9 @@ class ResultWriter:
         source = scene.source
         data = {
             "scene": str(source) if source else None,
-            "scene_sha256": hashlib.sha256(Path(source).read_bytes()).hexdigest()
-            if source else None,
+            "scene_file_sha256": file_sha256(Path(source)) if source else None,
             "title": scene.title,
+            "overrides": list(scene.overrides),
             "versions": compat.versions(),
             "mpi_ranks": self.comm.size,
             "dofs": n_dofs,

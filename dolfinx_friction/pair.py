@@ -26,6 +26,7 @@ is a pressure per length.
 """
 from __future__ import annotations
 
+import dataclasses
 import uuid
 from dataclasses import dataclass
 from typing import Optional, Sequence, Union
@@ -295,6 +296,19 @@ class NodeToSurface:
         master.translation[:] = _vector(value, f"{self.name}: obstacle translation")
 
     # ------------------------------------------------------------- set-up
+    def settings(self) -> dict:
+        """The contact settings in use, every default resolved: ``law`` (``"linear"``,
+        ``"exponential"``, ``"tabular"``) and its parameters (``K``, ``sigma_inf``, ``c0`` |
+        ``c0``, ``p0`` | ``pressures``, ``overclosures``), ``mu``, ``stick_slope``,
+        ``tangent``, ``pairing_iterations``."""
+        element = self.params.element
+        law = element.law
+        return {"law": type(law).__name__.lower(),
+                **(dataclasses.asdict(law) if dataclasses.is_dataclass(law) else {}),
+                "mu": element.mu, "stick_slope": element.stick_slope,
+                "tangent": element.tangent,
+                "pairing_iterations": self.params.pairing_iterations}
+
     def _parameters(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
                     pairing_iterations) -> "_Parameters":
         name = self.name
