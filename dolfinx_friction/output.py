@@ -340,7 +340,7 @@ class FieldWriter:
         _collective(problem.comm, error)
         _silence_hdf5()
         self._size = 0  # bytes of the last increment's field folder and time series
-        self._series: dict[str, list] = {f.body.name: [] for f in problem.fields}
+        self._series: dict[str, list[str]] = {f.body.name: [] for f in problem.fields}
         self.outputs = [compat.output_spaces(f) for f in problem.fields]
 
     def _contact_fields(self, field) -> dict[str, np.ndarray]:

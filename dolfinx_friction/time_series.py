@@ -14,12 +14,16 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from xml.sax.saxutils import quoteattr
 
-HEADER = '<?xml version="1.0"?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n'
+HEADER = '<?xml version="1.0"?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n<Xdmf Version="3.0">\n'
+INDENT = "  "
+LEVEL = 3  # an increment's grid in Xdmf / Domain / Grid (the collection)
 
 
-def increment_grid(xdmf: Path, t: float) -> ET.Element:
-    """One increment's uniform grid for the collection in ``xdmf``'s grandparent.
+def increment_grid(xdmf: Path, t: float) -> str:
+    """One increment's uniform grid (XML text, indented) for the collection in ``xdmf``'s
+    grandparent.
 
     Parameters
     ----------
@@ -42,15 +46,13 @@ def increment_grid(xdmf: Path, t: float) -> ET.Element:
             if not Path(file).is_absolute():
                 file = f"{xdmf.parent.name}/{file}"
             item.text = f"{file}{sep}{dataset}"
-    return grid
+    ET.indent(grid, INDENT, level=LEVEL)
+    return INDENT * LEVEL + ET.tostring(grid, encoding="unicode").strip() + "\n"
 
 
-def collection(name: str, grids: list[ET.Element]) -> str:
+def collection(name: str, grids: list[str]) -> str:
     """The XDMF document of a temporal collection ``name`` of ``grids`` (from
     :func:`increment_grid`), in time order."""
-    root = ET.Element("Xdmf", Version="3.0")
-    series = ET.SubElement(ET.SubElement(root, "Domain"), "Grid", Name=name,
-                           GridType="Collection", CollectionType="Temporal")
-    series.extend(grids)
-    ET.indent(root, "  ")
-    return HEADER + ET.tostring(root, encoding="unicode") + "\n"
+    return (f"{HEADER}{INDENT}<Domain>\n{INDENT * 2}<Grid Name={quoteattr(name)} "
+            f'GridType="Collection" CollectionType="Temporal">\n{"".join(grids)}'
+            f"{INDENT * 2}</Grid>\n{INDENT}</Domain>\n</Xdmf>\n")
