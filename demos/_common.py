@@ -62,8 +62,14 @@ def ensure_mesh(path: Path, build: Callable[..., None], rebuild: bool = False,
 def run_scene(scene: Path, args: argparse.Namespace):
     """Run a scene with the command-line overrides; returns (RunResult, seconds)."""
     from dolfinx_friction.api import run
+    from dolfinx_friction.progress import Progress
+    progress = Progress() if MPI.COMM_WORLD.rank == 0 and not args.quiet else None
     t0 = time.perf_counter()
-    result = run(scene, out=args.out, overrides=args.set, quiet=args.quiet)
+    try:
+        result = run(scene, out=args.out, overrides=args.set, progress=progress)
+    finally:
+        if progress is not None:
+            progress.close()
     return result, time.perf_counter() - t0
 
 

@@ -1,11 +1,11 @@
 """Run a scene: the entry point shared by the command line and Python scripts."""
 from __future__ import annotations
 
-import sys
+import logging
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional, Sequence, Union
+from typing import Callable, Optional, Sequence, Union
 
 from mpi4py import MPI
 
@@ -13,9 +13,12 @@ from dolfinx_friction.errors import interruption
 from dolfinx_friction.model import Scene
 from dolfinx_friction.output import ResultWriter
 from dolfinx_friction.problem import ContactProblem
+from dolfinx_friction.provenance import provenance
 from dolfinx_friction.scene import default_output_dir, load_scene
 from dolfinx_friction.solver import ConvergenceError, Increment, RunSummary, Solver
 
+
+log = logging.getLogger(__name__)
 
 #: Overclosure, as a share of the slave node spacing, beyond which a run warns that the
 #: penalty is too soft for the mesh.
@@ -33,12 +36,17 @@ class RunResult:
 
 
 def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
-        overrides: Sequence[str] = (), quiet: bool = False, write: bool = True,
+        overrides: Sequence[str] = (), write: bool = True,
         comm: MPI.Comm = MPI.COMM_WORLD, petsc_options: Optional[dict] = None,
-        reuse_factorisation: Optional[bool] = None) -> RunResult:
+        reuse_factorisation: Optional[bool] = None,
+        progress: Optional[Callable[[Increment], None]] = None) -> RunResult:
     """Solve a scene (a :class:`Scene` or a scene file) and write its results.
 
     ``out`` overrides ``[output] dir``; ``write=False`` keeps everything in memory;
+    ``progress`` is called with every converged increment once it is written (e.g. a
+    :class:`~dolfinx_friction.progress.Progress`; on every rank where it is given).
+    Nothing is printed: warnings (a penalty too soft for the mesh, nodes that slid off
+    their master) and notices go to the ``dolfinx_friction`` logger, from rank 0;
     ``petsc_options`` (without prefix) set the linear solver; ``reuse_factorisation``
     keeps a factorisation as GMRES preconditioner across Newton iterations (default:
     yes with the default MUMPS solver, no with ``petsc_options``; see ``linear``).
@@ -56,7 +64,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     writer = None
     if write:
         writer = ResultWriter(problem, solver.reaction_groups(), directory, scene.output.fields,
-                              scene.output.contact_table, quiet)
+                              scene.output.contact_table)
         interruption.directory = directory  # named by the line of an interrupted run
     solver.timers.add("setup", time.perf_counter() - start, time.process_time() - cpu)
     increments: list[Increment] = []
@@ -66,7 +74,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         if key not in warnings:
             warnings[key] = text
             if comm.rank == 0:
-                print(f"dolfinx-friction: warning: {text}", file=sys.stderr)
+                log.warning(text)
 
     def record(inc: Increment) -> None:
         # an increment that converges after a signal was announced naming it is not kept
@@ -93,6 +101,14 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
             finally:
                 interruption.writing = False
             interruption.checkpoint(comm)
+        if progress is not None:
+            progress(inc)
+
+    def extra() -> dict:  # summary.json beyond the counts: what was run, and the warnings
+        if comm.rank != 0:
+            return {}
+        return {**provenance(problem, solver.reaction_groups(), solver.linear),
+                "warnings": list(warnings.values())}
 
     try:
         summary = solver.run(record)
@@ -101,7 +117,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         if writer is not None:
             interruption.writing = True  # (a signal now: the failure is still reported)
             try:
-                writer.summary(solver.summary, {"warnings": list(warnings.values())})
+                writer.summary(solver.summary, extra())
             finally:
                 interruption.writing = False
         raise
@@ -109,7 +125,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     if writer is not None:
         interruption.writing = True  # all converged: a signal now only changes the exit status
         try:
-            writer.summary(summary, {"warnings": list(warnings.values())})
+            writer.summary(summary, extra())
         finally:
             interruption.writing = False
     return RunResult(problem, summary, increments, directory if write else None)

@@ -13,7 +13,7 @@ import warnings
 from pathlib import Path
 from typing import Optional, Sequence
 
-from dolfinx_friction import commands
+from dolfinx_friction import __version__, commands
 from dolfinx_friction.errors import (EXIT_INPUT, EXIT_INTERNAL, EXIT_SIGNAL, Interrupted,
                                      OutputError, classify, interruption)
 from dolfinx_friction.inputs import file_fault
@@ -32,6 +32,7 @@ def _parser() -> argparse.ArgumentParser:
                      description="Node-to-surface penalty contact with Coulomb friction "
                                  "(CalculiX scheme) on Gmsh scenes, solved with DOLFINx/PETSc.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
+    parser.add_argument("--version", action="version", version=f"dolfinx-friction {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     run = sub.add_parser("run", help="solve a scene and write its results")
     run.add_argument("scene", type=Path)
@@ -85,9 +86,15 @@ def _check(args, scene) -> None:
 
 
 def _run(args, scene) -> None:
-    from dolfinx_friction.api import run
-    result = run(scene, out=args.out, quiet=args.quiet)
     from mpi4py import MPI
+    from dolfinx_friction.api import run
+    from dolfinx_friction.progress import Progress
+    progress = Progress() if MPI.COMM_WORLD.rank == 0 and not args.quiet else None
+    try:
+        result = run(scene, out=args.out, progress=progress)
+    finally:
+        if progress is not None:
+            progress.close()
     if MPI.COMM_WORLD.rank == 0 and not args.quiet:
         s = result.summary
         print(f"done: {s.increments} increments, {s.newton_iterations} Newton iterations, "
@@ -125,6 +132,28 @@ def _quiet_libraries(debug: bool) -> None:
     handler.setLevel(logging.INFO if debug else logging.WARNING)
     handler.setFormatter(logging.Formatter("%(levelname)s:%(name)s:%(message)s"))
     root.addHandler(handler)
+
+
+class _NoticeFormatter(logging.Formatter):
+    def format(self, record: logging.LogRecord) -> str:
+        text = record.getMessage()
+        return text if record.levelno < logging.WARNING else \
+            f"dolfinx-friction: {record.levelname.lower()}: {text}"
+
+
+def _show_notices(quiet: bool) -> None:
+    """The package's log records as the command line's lines on stderr (the library logs
+    from rank 0 only): warnings as "dolfinx-friction: warning: ...", notices (a rerun
+    replacing results) as they are, unless ``--quiet``."""
+    logger = logging.getLogger("dolfinx_friction")
+    for old in [h for h in logger.handlers if isinstance(h.formatter, _NoticeFormatter)]:
+        logger.removeHandler(old)  # main() called again in this process
+    handler = logging.StreamHandler()
+    handler.setLevel(logging.WARNING if quiet else logging.INFO)
+    handler.setFormatter(_NoticeFormatter())
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    logger.propagate = False
 
 
 def _on_signal(signum: int, frame) -> None:
@@ -172,6 +201,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     _quiet_libraries(args.debug)
     if args.command in commands.COMMANDS:
         return commands.main(args)
+    _show_notices(getattr(args, "quiet", False))
     _install_signal_handlers()
     try:
         reason = file_fault(args.scene)

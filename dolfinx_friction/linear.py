@@ -68,6 +68,18 @@ class LinearSolver:
         #: why the last solve failed ("" if it did not)
         self.failure = ""
 
+    def settings(self) -> dict:
+        """The solver in use: ``ksp_type`` (``gmres`` on a kept factorisation, when one is
+        kept), ``pc_type``, ``factor_solver_type`` (factorisations only),
+        ``reuse_factorisation``."""
+        pc = self.ksp.getPC()
+        out = {"ksp_type": "gmres" if self.reuse else self.ksp.getType(),
+               "pc_type": pc.getType()}
+        if pc.getType() in ("lu", "cholesky", "ilu", "icc"):
+            out["factor_solver_type"] = pc.getFactorSolverType()
+        out["reuse_factorisation"] = self.reuse
+        return out
+
     def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> bool:
         """Solve; returns False when the solver failed (:attr:`failure` says why)."""
         keep = self.reuse and self._pays and J is self._factored and not self._paused

@@ -184,6 +184,7 @@ class Scene:
     output: Output = field(default_factory=Output)
     title: str = ""
     source: Optional[Path] = None  # the scene file, if read from one
+    overrides: tuple[str, ...] = ()  # the ``--set KEY=VALUE`` applied to the file, as given
 
     def rigid(self, name: str) -> Optional[Rigid]:
         return next((r for r in self.rigids if r.name == name), None)

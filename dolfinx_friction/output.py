@@ -9,7 +9,9 @@ and readable.
 
 What a killed run leaves, precisely.  For each increment the files are written
 in this order: the rows of ``contact.csv``, the field folder
-``fields/step<s>_increment<iiii>``, then the row of ``history.csv``.  So
+``fields/step<s>_increment<iiii>``, each body's time series ``fields/<body>.xdmf``
+(rewritten atomically, listing the folders in place), then the row of
+``history.csv``.  So
 
 * ``history.csv`` lists complete increments only; it is the record of what
   converged *and was fully written*;
@@ -18,6 +20,9 @@ in this order: the rows of ``contact.csv``, the field folder
 * ``fields/`` holds a complete folder for each increment of ``history.csv``,
   possibly one more (the same next increment), and at most one hidden
   ``.<name>.partial`` scratch folder, which is never a result;
+* each time series ``fields/<body>.xdmf`` lists the increments of ``history.csv``,
+  possibly followed by that next one (its folder in place), and only complete folders;
+  a hidden ``.<body>.xdmf.tmp`` may be left and is not a result;
 * every line of the tables ends with a newline: an increment's rows go out in a
   single ``write(2)`` of whole lines (a reader may still treat a last line
   without its newline as incomplete, should the kernel ever cut such a write
@@ -35,24 +40,25 @@ dolfinx aborts the process when HDF5 fails to close a file on a full disk.
 from __future__ import annotations
 
 import errno
-import hashlib
 import json
+import logging
 import os
 import shutil
-import sys
 from pathlib import Path
 from typing import Optional
 
 import numpy as np
 import ufl
 
-from dolfinx_friction import compat
+from dolfinx_friction import compat, time_series
 from dolfinx_friction.contact.element import STATUS_NAMES
 from dolfinx_friction.errors import OutputError
 from dolfinx_friction.problem import ContactProblem
 from dolfinx_friction.results import write_atomic as _write_atomic
+from dolfinx_friction.provenance import file_sha256
 from dolfinx_friction.solver import Increment, RunSummary
 
+log = logging.getLogger(__name__)
 OUR_FILES = ("history.csv", "contact.csv", "summary.json")
 AXES = "xyz"
 
@@ -133,10 +139,10 @@ class ResultWriter:
     """Writes the outputs of one run of a :class:`ContactProblem` into ``directory``."""
 
     def __init__(self, problem: ContactProblem, reaction_groups: list[str], directory: Path,
-                 fields: bool = True, contact_table: bool = True, quiet: bool = False):
+                 fields: bool = True, contact_table: bool = True):
         self.problem, self.comm = problem, problem.comm
         self.dir = Path(directory)
-        self.fields, self.contact_table, self.quiet = fields, contact_table, quiet
+        self.fields, self.contact_table = fields, contact_table
         self.rank0 = self.comm.rank == 0
         d = problem.gdim
         self._prepare_directory()
@@ -177,9 +183,8 @@ class ResultWriter:
                 old = [self.dir / f for f in OUR_FILES if (self.dir / f).exists()]
                 if (self.dir / "fields").exists():
                     old.append(self.dir / "fields")
-                if old and not self.quiet:
-                    print(f"overwriting the results of an earlier run in {self.dir}",
-                          file=sys.stderr)
+                if old:
+                    log.info("overwriting the results of an earlier run in %s", self.dir)
                 for path in old:
                     shutil.rmtree(path) if path.is_dir() else path.unlink()
                 probe = self.dir / ".write_test"
@@ -242,12 +247,6 @@ class ResultWriter:
             except OSError as exc:
                 error = _fault(self.dir / "history.csv", exc)
         _collective(self.comm, error)
-        if self.rank0:
-            if not self.quiet:
-                print(f"step {inc.step} ({inc.step_name}) increment {inc.increment}: "
-                      f"t = {inc.t:.4f}, {inc.iterations} Newton iterations, residual "
-                      f"{inc.residual:.2e}, {inc.active} in contact, {inc.slipping} slipping",
-                      flush=True)
 
     def _contact_rows(self, inc: Increment) -> None:
         blocks = []
@@ -291,9 +290,9 @@ class ResultWriter:
         source = scene.source
         data = {
             "scene": str(source) if source else None,
-            "scene_sha256": hashlib.sha256(Path(source).read_bytes()).hexdigest()
-            if source else None,
+            "scene_file_sha256": file_sha256(Path(source)) if source else None,
             "title": scene.title,
+            "overrides": list(scene.overrides),
             "versions": compat.versions(),
             "mpi_ranks": self.comm.size,
             "dofs": n_dofs,
@@ -316,7 +315,8 @@ class ResultWriter:
 
 
 class FieldWriter:
-    """Displacement and contact fields of every body, one XDMF file per body and increment."""
+    """Displacement, contact and stress fields of every body: one XDMF file per body and
+    increment, and per body the time series over them (:mod:`time_series`)."""
 
     def __init__(self, problem: ContactProblem, directory: Path):
         self.problem, self.dir = problem, directory
@@ -328,7 +328,8 @@ class FieldWriter:
                 error = _fault(directory, exc)
         _collective(problem.comm, error)
         _silence_hdf5()
-        self._size = 0  # bytes of the last increment's field folder
+        self._size = 0  # bytes of the last increment's field folder and time series
+        self._series: dict[str, list[str]] = {f.body.name: [] for f in problem.fields}
         self.outputs = [compat.output_spaces(f) for f in problem.fields]
 
     def _contact_fields(self, field) -> dict[str, np.ndarray]:
@@ -388,10 +389,40 @@ class FieldWriter:
         if comm.rank == 0:
             try:
                 os.replace(scratch, self.dir / name)
-                self._size = sum(f.stat().st_size for f in (self.dir / name).iterdir())
             except OSError as exc:
                 error = _fault(self.dir / name, exc)
+            error = error or self._extend_series(self.dir / name, inc.t)
         _collective(comm, error)
+
+    def _extend_series(self, folder: Path, t: float) -> Optional[str]:
+        """Add the increment in ``folder`` (in place) to every body's time series
+        ``fields/<body>.xdmf``, each rewritten atomically (rank 0); why not, or None.  A
+        failure removes the folder: the series never lacks an increment that is written."""
+        grids = {}
+        for field in self.problem.fields:
+            name = field.body.name
+            grids[name] = self._series[name] + [
+                time_series.increment_grid(folder / f"{name}.xdmf", t)]
+        written = []
+        for name, series in grids.items():
+            path = self.dir / f"{name}.xdmf"
+            try:
+                _write_atomic(path, time_series.collection(name, series))
+            except OSError as exc:
+                try:  # the series written already drop this increment, then its folder goes
+                    for done in written:
+                        _write_atomic(self.dir / f"{done}.xdmf",
+                                      time_series.collection(done, self._series[done]))
+                    shutil.rmtree(folder)
+                except OSError:
+                    pass  # the folder stays, complete, as a series written refers to it
+                return _fault(path, exc)
+            written.append(name)
+        self._series = grids
+        # what the next increment needs: its folder and the series rewritten beside the old
+        self._size = sum(f.stat().st_size for f in folder.iterdir()) + sum(
+            (self.dir / f"{name}.xdmf").stat().st_size for name in grids)
+        return None
 
     def _space_for(self, folder: Path) -> Optional[str]:
         """Why the next field folder would not fit (or None): free space below twice the

@@ -319,12 +319,14 @@ class NodeToSurface:
         return self.params.element.mu
 
     def resolved(self) -> dict:
-        """The contact law as used, every default resolved, as plain numbers: ``law``
+        """The contact settings as used, every default resolved, as plain numbers: ``law``
         (``"linear"``, ``"exponential"``, ``"tabular"``) and its parameters (``K``,
         ``sigma_inf``, ``c0`` / ``c0``, ``p0`` / ``pressures``, ``overclosures``),
-        ``mu``, ``stick_slope`` and the slave node ``spacing`` h the defaults scale with."""
+        ``mu``, ``stick_slope``, ``tangent``, ``pairing_iterations`` and the slave node
+        ``spacing`` h the defaults scale with."""
         return {"law": type(self.law).__name__.lower(), **asdict(self.law), "mu": self.mu,
-                "stick_slope": self.stick_slope, "spacing": self.spacing}
+                "stick_slope": self.stick_slope, "tangent": self.params.element.tangent,
+                "pairing_iterations": self.params.pairing_iterations, "spacing": self.spacing}
 
     # ------------------------------------------------------------- set-up
     def _given(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,

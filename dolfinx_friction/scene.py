@@ -731,7 +731,7 @@ def load_scene(path: PathLike, overrides: Sequence[str] = ()) -> Scene:
             apply_override(data, assignment)
         except SceneError as error:
             raise error.with_source(path) from None
-    return parse_scene(data, source=path)
+    return replace(parse_scene(data, source=path), overrides=tuple(overrides))
 
 
 def default_output_dir(scene: Scene) -> Path:

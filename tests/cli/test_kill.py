@@ -12,6 +12,10 @@ of ``history.csv``.  After a kill
   file present); there is one for each increment of ``history.csv``, possibly
   one more (the same next one); a hidden ``.<name>.partial`` scratch folder may
   be left and is not a result;
+* each body's time series ``fields/<body>.xdmf`` lists the increments of ``history.csv``,
+  possibly that next one, and refers only to datasets of complete folders (also when the
+  kill comes between a folder and its ``history.csv`` row, where the series are
+  rewritten);
 * ``summary.json`` is not written (the run did not end).
 
 SIGINT / SIGTERM (serially and under ``mpirun -n 2``, where Open MPI turns either into
@@ -42,11 +46,13 @@ from mpi4py import MPI
 
 from dolfinx_friction import compat
 from tests import meshes
+from tests.cli.test_outputs import series_grids
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
                                 reason="kills a subprocess started from a serial pytest")
 
 ROOT = Path(__file__).resolve().parents[2]
+BODIES = ("block", "foundation")
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 SCENE = """\
 title = "many increments, killed on the way"
@@ -109,8 +115,25 @@ def _read_table(path: Path) -> tuple[list[str], list[list[str]]]:
     return header, body
 
 
-@pytest.fixture(scope="module")
-def killed_run(tmp_path_factory):
+def _folders(fields: Path) -> int:
+    try:
+        return sum(1 for e in os.scandir(fields) if e.name.startswith("step"))
+    except FileNotFoundError:
+        return 0
+
+
+def _time_to_kill(out: Path, moment: str) -> bool:
+    """``any``: once history.csv holds 3 rows; ``fields``: in the window between an
+    increment's field folder and its history.csv row (where the time series are
+    rewritten), else after 30 rows."""
+    rows = _data_rows(out / "history.csv")
+    if moment == "any" or rows >= 30:
+        return rows >= 3
+    return rows >= 3 and _folders(out / "fields") > rows
+
+
+@pytest.fixture(scope="module", params=["any", "fields"])
+def killed_run(tmp_path_factory, request):
     d = tmp_path_factory.mktemp("kill")
     meshes.two_boxes(d / "two.msh", n_block=(2, 2, 1), n_foundation=(3, 3, 1))
     (d / "scene.toml").write_text(SCENE)
@@ -120,11 +143,11 @@ def killed_run(tmp_path_factory):
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=_env())
     deadline = time.monotonic() + 240
     try:
-        while _data_rows(out / "history.csv") < 3:
+        while not _time_to_kill(out, request.param):
             assert proc.poll() is None, (f"the run ended before it was killed "
                                          f"(exit {proc.returncode}): {proc.stderr.read()!r}")
             assert time.monotonic() < deadline, "the run is too slow to reach 3 increments"
-            time.sleep(0.01)
+            time.sleep(0.01 if request.param == "any" else 0.0002)
         assert proc.poll() is None, "the run ended before it was killed"
         os.kill(proc.pid, signal.SIGKILL)
     finally:
@@ -171,14 +194,17 @@ def test_field_folders_are_complete(killed_run):
     following = (done[-1][0], done[-1][1] + 1)
     fields = killed_run / "fields"
     results = []
+    series = {f"{body}.xdmf" for body in BODIES}
     for entry in sorted(fields.iterdir()):
-        if entry.name.endswith(".partial"):
-            assert entry.name.startswith("."), f"scratch folder {entry.name} is not hidden"
+        if entry.name.endswith((".partial", ".xdmf.tmp")):
+            assert entry.name.startswith("."), f"scratch file {entry.name} is not hidden"
+            continue
+        if entry.name in series:
             continue
         match = re.fullmatch(r"step(\d+)_increment(\d{4})", entry.name)
         assert match and entry.is_dir(), f"unexpected entry {entry.name} in fields/"
         results.append((int(match.group(1)), int(match.group(2))))
-        for body in ("block", "foundation"):
+        for body in BODIES:
             xdmf = entry / f"{body}.xdmf"
             root = ET.parse(xdmf).getroot()  # complete XML
             items = [i.text.strip() for i in root.iter("DataItem") if i.get("Format") == "HDF"]
@@ -188,6 +214,14 @@ def test_field_folders_are_complete(killed_run):
                 assert h5.read_bytes()[:8] == HDF5_SIGNATURE, f"{h5} missing or not HDF5"
     # fields are written before the history row: every recorded increment has its folder
     assert results in (done, done + [following]), (results, done)
+    # each body's time series lists complete folders only: those of history.csv, possibly
+    # the next one
+    for body in BODIES:
+        listed = [tuple(int(v) for v in re.fullmatch(r"step(\d+)_increment(\d{4})",
+                                                     g.get("Name")).groups())
+                  for g in series_grids(fields, body)]
+        assert listed in (done, done + [following]) and set(listed) <= set(results), \
+            (body, listed, done)
 
 
 def test_no_summary_of_an_unfinished_run(killed_run):
@@ -346,6 +380,9 @@ def test_full_disk_one_line(tmp_path, small_disk, what, ranks):
     header, rows = _read_table(out / "contact.csv")
     assert len(rows) == 9 * len(done)  # every increment's block whole: 9 slave nodes
     if what == "fields":
-        visible = sorted(e.name for e in (out / "fields").iterdir())
+        visible = sorted(e.name for e in (out / "fields").iterdir() if e.is_dir()
+                         and not e.name.startswith("."))
         assert visible == [f"step{s}_increment{i:04d}" for s, i in done], visible
+        for body in BODIES:
+            assert [g.get("Name") for g in series_grids(out / "fields", body)] == visible
     assert not (out / "summary.json").exists()

@@ -103,7 +103,7 @@ def test_non_finite_converged_increment_is_cut_back(mesh_dir, poison, which):
     finite, and the run ends as the unpoisoned one at t = 2."""
     poison(which, {2})  # the first attempt of the slide's first increment
     out = mesh_dir / f"cut_back_{which}"
-    result = run(_scene(mesh_dir, f"cut_back_{which}"), out=out, quiet=True)
+    result = run(_scene(mesh_dir, f"cut_back_{which}"), out=out)
     assert result.summary.converged and result.summary.cutbacks == 1
     if COMM.rank == 0:
         rows = _rows(out / "history.csv")
@@ -121,8 +121,7 @@ def test_non_finite_every_time_fails_and_writes_nothing(mesh_dir, poison):
     poison("reaction", set(range(2, 1000)))
     out = mesh_dir / "never_finite"
     with pytest.raises(ConvergenceError, match="non-finite"):
-        run(_scene(mesh_dir, "never_finite", [("step.1.max_cutbacks", 1)]), out=out,
-            quiet=True)
+        run(_scene(mesh_dir, "never_finite", [("step.1.max_cutbacks", 1)]), out=out)
     if COMM.rank == 0:
         rows = _rows(out / "history.csv")
         assert [(r["step"], r["increment"]) for r in rows] == [("0", "1")]

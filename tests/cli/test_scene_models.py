@@ -57,7 +57,7 @@ def test_pressure_follows_the_deformed_face(shared_dir, follower):
         rigids=(Rigid("floor", "plane", point=(0.0, 0.0), normal=(0.0, 1.0)),),
         contacts=(ContactPair("bottom", "floor", K=2000 * E),),
         steps=(Step("squeeze", increments=4, bcs=(BC("left", (0.0, None)),), loads=(load,)),))
-    result = run(scene, write=False, quiet=True)
+    result = run(scene, write=False)
     state = contact_state(result)
     carried = state["F_N"].sum()
     # the homogeneous state: lateral stretch a, axial b with P_11 = 0 and P_22 = -p a (or -p)

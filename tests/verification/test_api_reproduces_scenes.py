@@ -57,7 +57,7 @@ def compare(by_hand: list, scene_run, groups: list[str]) -> float:
 
 
 def test_incline_by_hand():
-    scene_run = run(DEMOS / "incline.toml", write=False, quiet=True)
+    scene_run = run(DEMOS / "incline.toml", write=False)
     body = gmsh_io.load_mesh(DEMOS / "incline.msh", ["block"]).bodies["block"]
     V = compat.vector_space(body.mesh, 1)
     u, v = fem.Function(V), ufl.TestFunction(V)
@@ -92,7 +92,7 @@ def test_incline_by_hand():
 
 @pytest.mark.slow
 def test_sliding_block_by_hand():
-    scene_run = run(DEMOS / "sliding_block.toml", write=False, quiet=True)
+    scene_run = run(DEMOS / "sliding_block.toml", write=False)
     bodies = gmsh_io.load_mesh(DEMOS / "sliding_block.msh", ["block", "foundation"]).bodies
     spaces = [compat.vector_space(bodies[b].mesh, 1) for b in ("block", "foundation")]
     us = [fem.Function(V) for V in spaces]

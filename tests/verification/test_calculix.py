@@ -218,7 +218,7 @@ def test_block_on_foundation_matches_calculix(shared_dir, cells, mu):
     scene = load_scene(_scene_toml(shared_dir, mu))
     ccx, ccx_wall = _run_ccx(scene, shared_dir / "blocks.inp")
     t0 = time.perf_counter()
-    result = run(scene, write=False, quiet=True)
+    result = run(scene, write=False)
     ours_wall = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
 
     assert [(i.step, i.increment) for i in result.increments] == \

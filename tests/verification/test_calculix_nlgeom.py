@@ -88,7 +88,7 @@ def _ours_and_ccx(scene: Scene, inp):
     from dolfinx_friction.api import run
     ccx = _ccx(scene, inp)
     t0 = time.perf_counter()
-    result = run(scene, write=False, quiet=True)
+    result = run(scene, write=False)
     wall = time.perf_counter() - t0
     assert [(i.step, i.increment) for i in result.increments] == \
         [(s, k) for s in sorted(ccx.reactions) for k in sorted(ccx.reactions[s])]
@@ -313,7 +313,7 @@ def test_saint_venant_kirchhoff_press_and_shear_matches_calculix(tmp_path):
     scene = press_shear_scene(_blocks_mesh(tmp_path / "blocks.msh"), "saint-venant-kirchhoff",
                               depth=0.1 * 0.25, shear=0.03, shear_increments=4)
     ccx = _ccx(scene, tmp_path / "svk.inp")
-    result = run(scene, write=False, quiet=True)
+    result = run(scene, write=False)
     assert [(i.step, i.increment) for i in result.increments] == \
         [(s, k) for s in sorted(ccx.reactions) for k in sorted(ccx.reactions[s])]
     rows, worst = _compare(result.increments, ccx.reactions)

@@ -69,7 +69,7 @@ def compression_scene(path, model: str, dim: int, degree: int):
 @pytest.mark.parametrize("dim, degree", [(2, 1), (2, 2), (3, 1), (3, 2)])
 def test_homogeneous_compression_matches_the_closed_form(shared_dir, model, dim, degree):
     scene, H = compression_scene(shared_dir, model, dim, degree)
-    result = run(scene, write=False, quiet=True)
+    result = run(scene, write=False)
     gaps = contact_state(result)["g_N"]
     assert np.ptp(gaps) < 1e-12 * H  # homogeneous: one overclosure everywhere
     axial = (H - 0.4 * H - gaps.mean()) / H  # the plane is at 0: the gap is the bottom's height
@@ -130,7 +130,7 @@ def test_an_inverted_element_stops_the_run_naming_the_body(shared_dir):
         steps=(Step("crush", max_cutbacks=2, bcs=(BC("left", (0.0, None)),
                                                   BC("top", (None, -0.3)))),))
     with pytest.raises(ConvergenceError) as info:
-        run(scene, write=False, quiet=True)
+        run(scene, write=False)
     message = str(info.value)
     assert "step 0 ('crush'), increment " in message and "at t = " in message
     assert "body 'block' inverts (det F <= 0)" in message
