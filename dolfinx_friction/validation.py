@@ -214,10 +214,9 @@ def directory(value: Any, key: str) -> Path:
 
 
 def mesh_source(value: Any, key: str) -> Any:
-    """A ``.msh`` path, or a live gmsh model (the ``gmsh`` module; checked when loaded)."""
-    if isinstance(value, (str, os.PathLike)):
-        return Path(msh_file(os.fspath(value), key))
-    return value
+    """A mesh file (a str or path; the mesh loader reads it as Gmsh MSH 2.2 or 4.1 or refuses
+    it), or a live gmsh model (the ``gmsh`` module)."""
+    return Path(value) if isinstance(value, (str, os.PathLike)) else value
 
 
 ANY_NUMBER = number()
