@@ -21,8 +21,8 @@ Component = Optional[float]
 LAWS = ("linear", "exponential", "tabular", "hard")
 #: Constitutive models of a body: small-strain linear elasticity, or finite strain (the
 #: scene is then solved geometrically nonlinearly): Saint Venant-Kirchhoff (Green-Lagrange
-#: strain, second Piola-Kirchhoff stress from E and nu: CalculiX's NLGEOM with *ELASTIC) and
-#: compressible Neo-Hooke as CalculiX's *HYPERELASTIC, NEO HOOKE.
+#: strain, second Piola-Kirchhoff stress from E and nu: CalculiX's NLGEOM with ``*ELASTIC``) and
+#: compressible Neo-Hooke as CalculiX's ``*HYPERELASTIC, NEO HOOKE``.
 MODELS = ("linear", "saint-venant-kirchhoff", "neo-hookean")
 SHAPES = ("plane", "sphere", "cylinder")
 TANGENTS = ("consistent", "calculix")
