@@ -4,6 +4,11 @@ Plain dataclasses, no dolfinx.  Quantities whose default depends on the mesh
 or on the slave body's material (``K``, ``sigma_inf``, ``stick_slope``) are
 ``None`` here and resolved by :meth:`ContactPair.resolved` once the slave
 body is known.
+
+Every dataclass checks and converts its fields when built, by the rules of its scene-file
+table (:data:`RULES`, with the checks of :mod:`dolfinx_friction.validation`): a script and a
+scene file are held to the same rules and get the same one-line :class:`SceneError`
+messages (see :mod:`dolfinx_friction.validation` for how the fields are named).
 """
 from __future__ import annotations
 
@@ -144,6 +149,9 @@ class RigidMotion:
 
 @dataclass(frozen=True)
 class Step:
+    """A load step: the totals prescribed at its end, reached in ``increments`` equal
+    increments (each halved at most ``max_cutbacks`` times), each solved by Newton."""
+
     name: str
     increments: int = 1
     max_cutbacks: int = 6
@@ -161,6 +169,8 @@ class Step:
 
 @dataclass(frozen=True)
 class Output:
+    """What a run writes, and where (``dir`` None: ``<scene>_results`` next to the scene)."""
+
     dir: Optional[Path] = None
     reactions: Optional[tuple[str, ...]] = None  # None: every group carrying a bc
     fields: bool = True
