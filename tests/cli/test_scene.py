@@ -12,10 +12,12 @@ import tomllib
 from pathlib import Path
 from typing import Any, Callable
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from dolfinx_friction.errors import EXIT_INPUT, classify
 from dolfinx_friction.model import (
     BC,
     Body,
@@ -835,7 +837,6 @@ def test_python_values_are_converted_like_the_file():
     """A free component is None or "free"; sequences become tuples, numbers floats."""
     assert BC("top", [0.0, "free"]) == BC("top", [0.0, None]) == BC("top", (0.0, None))
     assert BC("top", [0, None]).u == (0.0, None) and isinstance(BC("top", [0, 1]).u[0], float)
-    import numpy as np
     rigid = Rigid("floor", "plane", point=np.zeros(2), normal=np.array([0, 1]))
     assert rigid.point == (0.0, 0.0) and rigid.normal == (0.0, 1.0)
     assert Step("s", increments=np.int64(3), bcs=[BC("a", (0, 0))]).bcs == (BC("a", (0, 0)),)
@@ -850,7 +851,6 @@ def test_python_values_are_converted_like_the_file():
 
 def test_python_error_is_an_input_error():
     """The command line and scripts classify it as bad input (exit status 2), one line."""
-    from dolfinx_friction.errors import EXIT_INPUT, classify
     with pytest.raises(SceneError) as caught:
         ContactPair(slave="a", master="b", mu=-0.3)
     assert classify(caught.value) == (EXIT_INPUT, "contact.mu = -0.3: must be >= 0")
