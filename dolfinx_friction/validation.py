@@ -297,7 +297,7 @@ def items(cls: type, min_length: int = 0) -> Check:
 def instance(cls: type) -> Check:
     def check(value: Any, key: str) -> Any:
         if not isinstance(value, cls):
-            fail(key, f"must be a {cls.__name__}")
+            fail(key, f"must be of type {cls.__name__}")
         return value
 
     return check

@@ -829,6 +829,8 @@ def test_python_scene_checks_name_the_scene_entries():
                                                           "contact.0"
     with pytest.raises(SceneError, match="^body: needs at least 1 Body$"):
         Scene(mesh=scene.mesh, bodies=(), steps=scene.steps)
+    with pytest.raises(SceneError, match="^output: must be of type Output$"):
+        Scene(mesh=scene.mesh, bodies=scene.bodies, steps=scene.steps, output=None)
     with pytest.raises(SceneError, match="^step.bc: must be a sequence of BC$"):
         Step("s", bcs=({"on": "top", "u": [0, 0]},))
 
