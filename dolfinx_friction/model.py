@@ -20,11 +20,11 @@ from dolfinx_friction import validation as v
 from dolfinx_friction.validation import Key, Rules, validate
 
 Vector = tuple[float, ...]
-#: A prescribed displacement component: a number, or ``None`` for "free".
+#: A prescribed displacement component, a number or ``None`` for "free".
 Component = Optional[float]
 
 LAWS = ("linear", "exponential", "tabular", "hard")
-#: Constitutive models of a body: small-strain linear elasticity, or finite strain (the
+#: Constitutive models of a body, small-strain linear elasticity or finite strain (the
 #: scene is then solved geometrically nonlinearly): Saint Venant-Kirchhoff (Green-Lagrange
 #: strain, second Piola-Kirchhoff stress from E and nu: CalculiX's NLGEOM with ``*ELASTIC``) and
 #: compressible Neo-Hooke as CalculiX's ``*HYPERELASTIC, NEO HOOKE``.
