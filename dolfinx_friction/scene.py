@@ -1,11 +1,13 @@
 """Scene files: TOML → validated :mod:`dolfinx_friction.model` objects.
 
 The format is the contract of ``shared/scene-format.md`` (version 1).  This
-module is pure Python (no dolfinx): it checks everything that can be checked
-without the mesh — key names, types, ranges, references between sections and
-the consistency of vector lengths across the scene.  What needs the mesh
-(group names, the geometric dimension, overlapping bc groups) is checked by
-the mesh loader.
+module is pure Python (no dolfinx): it checks the TOML structure (key names,
+required keys, tables and arrays of tables) and builds the model dataclasses,
+which check the values and the scene as a whole by the rules they share with
+the Python API (:mod:`dolfinx_friction.validation`): types, ranges, references
+between sections and the consistency of vector lengths across the scene.  What
+needs the mesh (group names, the geometric dimension, overlapping bc groups) is
+checked by the mesh loader.
 
 Every problem raises :class:`SceneError` with a one-line message naming the
 file, the dotted key path (arrays indexed from 0) and what is wrong::
