@@ -6,8 +6,31 @@ tags), :class:`Surface`, the rigid obstacles :func:`rigid_plane`, :func:`rigid_s
 :func:`rigid_cylinder`, :func:`create_matrix`; :class:`BlockProblem` (bodies given by
 UFL residuals, with contact), :class:`Newton`, :func:`solve_steps`, :func:`snes_solve`.
 They import dolfinx on first use.
+
+The package logs through :mod:`logging` (logger ``dolfinx_friction``, silent unless the
+program configures logging) and prints nothing.  The form compiler's chatter (the C compiler
+command lines that distutils logs at INFO on the root logger while dolfinx's JIT builds a
+form or element) is dropped, unless the ``dolfinx_friction`` logger is enabled for DEBUG
+(``dolfinx-friction --debug``); warnings and errors always pass.
 """
+import logging
+import re
+
 __version__ = "0.1.0"
+
+
+class _CompilerChatter(logging.Filter):
+    """Drops distutils' records below WARNING unless the package logger is at DEBUG."""
+
+    _DISTUTILS = re.compile(r"[\\/]_?distutils[\\/]")
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return (record.levelno >= logging.WARNING or not self._DISTUTILS.search(record.pathname)
+                or logging.getLogger(__name__).isEnabledFor(logging.DEBUG))
+
+
+logging.getLogger(__name__).addHandler(logging.NullHandler())
+logging.getLogger().addFilter(_CompilerChatter())
 
 _PUBLIC = {
     "NodeToSurface": "pair", "Surface": "pair", "ContactState": "pair",

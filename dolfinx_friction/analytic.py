@@ -21,6 +21,7 @@ Effective quantities (Johnson §4.2)::
 """
 from __future__ import annotations
 
+import logging
 import math
 from typing import NamedTuple, Optional
 
@@ -35,6 +36,8 @@ __all__ = [
     "incline_push_ratio", "incline_hold_ratio",
     "fit_elliptic", "self_check",
 ]
+
+logger = logging.getLogger(__name__)
 
 
 # ------------------------------------------------------------------ effective
@@ -238,8 +241,10 @@ def fit_elliptic(x: np.ndarray, p: np.ndarray, floor: float = 0.2) -> tuple[floa
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz  # numpy 2 renamed trapz
 
 
-def self_check(verbose: bool = True) -> None:
-    """Check every formula against a textbook number or an independent form; raises on failure."""
+def self_check() -> None:
+    """Check every formula against a textbook number or an independent form; raises on failure.
+
+    Each check is logged (logger ``dolfinx_friction.analytic``, level INFO)."""
     checks = []
 
     def close(name, got, want, rtol=1e-9):
@@ -305,9 +310,8 @@ def self_check(verbose: bool = True) -> None:
     close("incline: hold ratio with mu = 0 is tan a", incline_hold_ratio(tan_a, 0.0), tan_a)
 
     failed = [c for c in checks if not c[3]]
-    if verbose:
-        for name, got, want, ok in checks:
-            print(f"{'ok  ' if ok else 'FAIL'} {name}: {got:.10g} (expected {want:.10g})")
+    for name, got, want, ok in checks:
+        logger.info("%s %s: %.10g (expected %.10g)", "ok  " if ok else "FAIL", name, got, want)
     if failed:
         raise AssertionError(f"{len(failed)} analytic self-checks failed: "
                              f"{[c[0] for c in failed]}")
@@ -316,6 +320,7 @@ def self_check(verbose: bool = True) -> None:
 if __name__ == "__main__":
     import doctest
 
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
     self_check()
     failures, tests = doctest.testmod()
     print(f"doctest: {tests - failures}/{tests} passed")

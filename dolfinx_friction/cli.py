@@ -113,18 +113,19 @@ def _rank() -> int:
 
 
 def _quiet_libraries(debug: bool) -> None:
-    """Library log records reach stderr from WARNING up (INFO too with --debug); numpy's
-    floating-point RuntimeWarnings only with --debug.
+    """Library log records reach stderr from WARNING up; with --debug INFO too, with the
+    form compiler's command lines (which the package drops otherwise: see
+    :mod:`dolfinx_friction`), and numpy's floating-point RuntimeWarnings.
 
     The handler is installed before dolfinx is imported, so that FFCx's
-    ``logging.basicConfig()`` adds none of its own; the level is on the handler, as
-    the JIT compiler (distutils) lowers the root logger's level to INFO while it
-    builds a form, which would fill stderr with compiler command lines.
+    ``logging.basicConfig()`` adds none of its own.
     """
     if not debug:  # numpy's floating-point chatter: the failure it means is reported
         warnings.filterwarnings("ignore", category=RuntimeWarning,
                                 message=r"(overflow|invalid value|divide by zero|underflow) "
                                         r"encountered")
+    else:
+        logging.getLogger("dolfinx_friction").setLevel(logging.DEBUG)
     root = logging.getLogger()
     if root.handlers:  # configured by an embedding program: leave it alone
         return

@@ -16,7 +16,7 @@ class OutputError(OSError):
 # (module, class) of the errors that blame the input.  Looked up in sys.modules
 # rather than imported: an exception of a module that was never imported cannot
 # be raised, and a bad scene is then answered without importing dolfinx.
-_INPUT_ERRORS = (("dolfinx_friction.scene", "SceneError"),
+_INPUT_ERRORS = (("dolfinx_friction.validation", "SceneError"),
                  ("dolfinx_friction.gmsh_io", "MeshError"),
                  ("dolfinx_friction.problem", "ModelError"),
                  ("dolfinx_friction.errors", "OutputError"))

@@ -4,6 +4,11 @@ Plain dataclasses, no dolfinx.  Quantities whose default depends on the mesh
 or on the slave body's material (``K``, ``sigma_inf``, ``stick_slope``) are
 ``None`` here (or :data:`CALCULIX` for CalculiX's rule) and resolved by
 :meth:`ContactPair.resolved` once the slave body and its node spacing are known.
+
+Every dataclass checks and converts its fields when built, by the rules of its scene-file
+table (:data:`RULES`, with the checks of :mod:`dolfinx_friction.validation`): a script and a
+scene file are held to the same rules and get the same one-line :class:`SceneError`
+messages (see :mod:`dolfinx_friction.validation` for how the fields are named).
 """
 from __future__ import annotations
 
@@ -11,21 +16,22 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Optional, Sequence, Union
 
+from dolfinx_friction import validation as v
+from dolfinx_friction.validation import CALCULIX, Key, Rules, validate
+
 Vector = tuple[float, ...]
-#: A prescribed displacement component: a number, or ``None`` for "free".
+#: A prescribed displacement component, a number or ``None`` for "free".
 Component = Optional[float]
 
 LAWS = ("linear", "exponential", "tabular", "hard")
-#: Constitutive models of a body: small-strain linear elasticity, or finite strain (the
+#: Constitutive models of a body, small-strain linear elasticity or finite strain (the
 #: scene is then solved geometrically nonlinearly): Saint Venant-Kirchhoff (Green-Lagrange
-#: strain, second Piola-Kirchhoff stress from E and nu: CalculiX's NLGEOM with *ELASTIC) and
-#: compressible Neo-Hooke as CalculiX's *HYPERELASTIC, NEO HOOKE.
+#: strain, second Piola-Kirchhoff stress from E and nu: CalculiX's NLGEOM with ``*ELASTIC``) and
+#: compressible Neo-Hooke as CalculiX's ``*HYPERELASTIC, NEO HOOKE``.
 MODELS = ("linear", "saint-venant-kirchhoff", "neo-hookean")
 SHAPES = ("plane", "sphere", "cylinder")
 TANGENTS = ("consistent", "calculix")
 
-#: ``K = "calculix"``, ``stick_slope = "calculix"``: CalculiX's rules, 50 E and E/2.
-CALCULIX = "calculix"
 #: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
 #: h: its node spacing, see :meth:`ContactPair.resolved`), from the stability maps
 #: (benchmarks/stability/README.md).  K = 10 E/h is the stiffest decade at which every
@@ -52,6 +58,9 @@ class Body:
     thickness: float = 1.0  # 2D only
     model: str = "linear"  # one of MODELS
 
+    def __post_init__(self) -> None:
+        validate(self, RULES[Body])
+
     @property
     def finite_strain(self) -> bool:
         return self.model != "linear"
@@ -73,6 +82,9 @@ class Rigid:
     center: Optional[Vector] = None
     axis: Optional[Vector] = None
     radius: Optional[float] = None
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[Rigid])
 
 
 @dataclass(frozen=True)
@@ -96,6 +108,9 @@ class ContactPair:
     #: Newton iterations per increment in which slave nodes are re-paired;
     #: later iterations keep the pairing frozen (CalculiX: 8).
     pairing_iterations: int = 8
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[ContactPair])
 
     def resolved(self, E_slave: float, spacing: Optional[float] = None) -> "ContactPair":
         """Fill the defaults (contact-theory.md §8, scene-format.md version 2).
@@ -131,6 +146,9 @@ class BC:
     on: str
     u: tuple[Component, ...]
 
+    def __post_init__(self) -> None:
+        validate(self, RULES[BC])
+
 
 @dataclass(frozen=True)
 class Load:
@@ -139,6 +157,9 @@ class Load:
     on: str
     traction: Optional[Vector] = None
     pressure: Optional[float] = None
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[Load])
 
 
 @dataclass(frozen=True)
@@ -149,9 +170,15 @@ class RigidMotion:
     displacement: Optional[Vector] = None
     force: Optional[Vector] = None
 
+    def __post_init__(self) -> None:
+        validate(self, RULES[RigidMotion])
+
 
 @dataclass(frozen=True)
 class Step:
+    """A load step: the totals prescribed at its end, reached in ``increments`` equal
+    increments (each halved at most ``max_cutbacks`` times), each solved by Newton."""
+
     name: str
     increments: int = 1
     max_cutbacks: int = 6
@@ -163,13 +190,21 @@ class Step:
     loads: tuple[Load, ...] = ()
     rigid: tuple[RigidMotion, ...] = ()
 
+    def __post_init__(self) -> None:
+        validate(self, RULES[Step])
+
 
 @dataclass(frozen=True)
 class Output:
+    """What a run writes, and where (``dir`` None: ``<scene>_results`` next to the scene)."""
+
     dir: Optional[Path] = None
     reactions: Optional[tuple[str, ...]] = None  # None: every group carrying a bc
     fields: bool = True
     contact_table: bool = True
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[Output])
 
 
 @dataclass(frozen=True)
@@ -186,6 +221,9 @@ class Scene:
     source: Optional[Path] = None  # the scene file, if read from one
     overrides: tuple[str, ...] = ()  # the ``--set KEY=VALUE`` applied to the file, as given
 
+    def __post_init__(self) -> None:
+        validate(self, RULES[Scene])
+
     def rigid(self, name: str) -> Optional[Rigid]:
         return next((r for r in self.rigids if r.name == name), None)
 
@@ -195,3 +233,83 @@ class Scene:
 
 def as_vector(values: Sequence[float]) -> Vector:
     return tuple(float(v) for v in values)
+
+
+#: The rules of each dataclass, by scene-file key in file order: checked when an object is
+#: built (from Python or by the scene reader, which takes the key names from here).
+RULES: dict[type, Rules] = {
+    Body: Rules("body", {
+        "name": Key(v.name, required=True),
+        "E": Key(v.modulus, required=True),
+        "nu": Key(v.number(gt=-1, lt=0.5), required=True),
+        "degree": Key(v.one_of(1, 2)),
+        "plane": Key(v.one_of("strain", "stress")),
+        "thickness": Key(v.number(gt=0)),
+        "model": Key(v.one_of(*MODELS)),
+    }),
+    Rigid: Rules("rigid", {
+        "name": Key(v.name, required=True),
+        "shape": Key(v.one_of(*SHAPES), required=True),
+        "point": Key(v.vector()),
+        "normal": Key(v.vector(nonzero=True)),
+        "center": Key(v.vector()),
+        "axis": Key(v.vector(nonzero=True)),
+        "radius": Key(v.number(gt=0)),
+    }, (v.check_shape,)),
+    ContactPair: Rules("contact", {
+        "slave": Key(v.name, required=True),
+        "master": Key(v.name, required=True),
+        "law": Key(v.one_of(*LAWS)),
+        "K": Key(v.penalty),
+        "sigma_inf": Key(v.number(gt=0)),
+        "c0": Key(v.number(gt=0)),
+        "p0": Key(v.number(ge=0)),
+        "table": Key(v.pressure_table),
+        "mu": Key(v.number(ge=0)),
+        "stick_slope": Key(v.penalty),
+        "tangent": Key(v.one_of(*TANGENTS)),
+        "pairing_iterations": Key(v.integer(1, 10_000)),
+    }, (v.check_law, v.check_not_self_contact)),
+    BC: Rules("step.bc", {
+        "on": Key(v.name, required=True),
+        "u": Key(v.displacement, required=True),
+    }),
+    Load: Rules("step.load", {
+        "on": Key(v.name, required=True),
+        "traction": Key(v.vector()),
+        "pressure": Key(v.ANY_NUMBER),
+    }, (v.exactly_one("traction", "pressure"),)),
+    RigidMotion: Rules("step.rigid", {
+        "name": Key(v.name, required=True),
+        "displacement": Key(v.vector()),
+        "force": Key(v.vector()),
+    }, (v.exactly_one("displacement", "force"),)),
+    Step: Rules("step", {
+        "name": Key(v.name),  # a scene file may leave it out: "step-<index>"
+        "increments": Key(v.integer(1, 1_000_000)),
+        "max_cutbacks": Key(v.integer(0, 50, "an increment halved more often is below the "
+                                             "resolution of the pseudo-time")),
+        "newton_rtol": Key(v.number(gt=0)),
+        "newton_atol": Key(v.number(gt=0)),
+        "max_iterations": Key(v.integer(1, 10_000)),
+        "line_search": Key(v.boolean),
+        "bc": Key(v.items(BC), field="bcs"),
+        "load": Key(v.items(Load), field="loads"),
+        "rigid": Key(v.items(RigidMotion)),
+    }, (v.check_step,)),
+    Output: Rules("output", {
+        "dir": Key(v.directory),
+        "reactions": Key(v.names),
+        "fields": Key(v.boolean),
+        "contact_table": Key(v.boolean),
+    }),
+    Scene: Rules("", {
+        "title": Key(v.string),
+        "mesh": Key(v.mesh_source, required=True),
+        "body": Key(v.items(Body, min_length=1), required=True, field="bodies"),
+        "rigid": Key(v.items(Rigid), field="rigids"),
+        "contact": Key(v.items(ContactPair), field="contacts"),
+        "step": Key(v.items(Step, min_length=1), required=True, field="steps"),
+        "output": Key(v.instance(Output)),
+    }, (v.check_scene,)),
+}

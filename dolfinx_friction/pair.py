@@ -146,7 +146,7 @@ class ContactState:
 
     @property
     def has_element(self) -> np.ndarray:
-        """(n,) bool: the nodes paired with a master (open or closed)."""
+        """The nodes paired with a master (open or closed), (n,) bool."""
         return self.status != NO_ELEMENT
 
 
@@ -186,35 +186,47 @@ class NodeToSurface:
     master : Surface or Rigid
         Master facets of a (usually other) body, or an analytic rigid obstacle; a rigid
         obstacle's translation is :attr:`obstacle_translation` (prescribed, no dofs).
-    spaces : the spaces of the user's system, in block order (default: the slave's space,
+    spaces : sequence of dolfinx FunctionSpaces, optional
+        The spaces of the user's system, in block order (default: the slave's space,
         then the master's if it is another one).
-    law : pressure-overclosure law (``contact.Linear``, ``Exponential``, ``Tabular``);
+    law : Law, optional
+        Pressure-overclosure law (``contact.Linear``, ``Exponential``, ``Tabular``);
         default: the linear law with penalty ``K``, ``sigma_inf``, ``c0``.
-    K, sigma_inf, c0 : the linear law's penalty [pressure/length], tension limit
-        [pressure] and cutoff factor; defaults 10 E/h (h: :attr:`spacing`), E / 70000, 1e-3
-        (contact-theory.md §8); ``K="calculix"``: CalculiX's 50 E.
-    mu : Coulomb friction coefficient (0: frictionless, the friction path is skipped).
-    stick_slope : tangential penalty ``lambda`` [pressure/length], default E/h;
-        ``"calculix"``: E / 2.
-    E : the slave body's Young's modulus, for the defaults above.
-    tangent : ``"consistent"`` (the exact tangent) or ``"calculix"``.
-    thickness : out-of-plane thickness of a 2D (plane) body, scales slave areas.
-    pairing_iterations : Newton iterations per increment that re-pair slave nodes
-        (CalculiX: 8; 1 is small sliding).
-    obstacle_index, n_obstacles : for a rigid obstacle whose translation is an unknown of
-        a :class:`~dolfinx_friction.BlockProblem` with ``obstacles=n_obstacles`` (force- or
+    K, sigma_inf, c0 : float or str, optional
+        The linear law's penalty [pressure/length], tension limit [pressure] and cutoff
+        factor; defaults 10 E/h (h: :attr:`spacing`), E / 70000, 1e-3 (contact-theory.md
+        §8); ``K="calculix"``: CalculiX's 50 E.
+    mu : float
+        Coulomb friction coefficient (0: frictionless, the friction path is skipped).
+    stick_slope : float or str, optional
+        Tangential penalty ``lambda`` [pressure/length], default E/h; ``"calculix"``: E / 2.
+    E : float, optional
+        The slave body's Young's modulus, for the defaults above.
+    tangent : str
+        ``"consistent"`` (the exact tangent) or ``"calculix"``.
+    thickness : float
+        Out-of-plane thickness of a 2D (plane) body, scales slave areas.
+    pairing_iterations : int
+        Newton iterations per increment that re-pair slave nodes (CalculiX: 8; 1 is small
+        sliding).
+    obstacle_index, n_obstacles : int
+        For a rigid obstacle whose translation is an unknown of a
+        :class:`~dolfinx_friction.BlockProblem` with ``obstacles=n_obstacles`` (force- or
         displacement-driven): which one it is.  Default: a prescribed translation.
 
     Attributes
     ----------
-    spacing : the slave surface's node spacing ``h`` [length] the defaults are scaled
-        with: the median over all slave nodes (all ranks) of each node's spacing in the
-        reference configuration (its representative area per thickness in 2D, the square
-        root of it in 3D; :class:`~dolfinx_friction.surfaces.SlaveNodes`).
-    law, stick_slope, mu : the contact law as used, defaults resolved (:meth:`resolved`).
-    ramp : share of the initial overclosures (found at the first pairing) still removed
-        from the clearances (contact-theory.md §3.4): ``1 - t`` in a first static step
-        that resolves them gradually, 0 otherwise (default).
+    spacing : float
+        The slave surface's node spacing ``h`` [length] the defaults are scaled with: the
+        median over all slave nodes (all ranks) of each node's spacing in the reference
+        configuration (its representative area per thickness in 2D, the square root of it
+        in 3D; :class:`~dolfinx_friction.surfaces.SlaveNodes`).
+    law, stick_slope, mu
+        The contact law as used, defaults resolved (:meth:`resolved`).
+    ramp : float
+        Share of the initial overclosures (found at the first pairing) still removed from
+        the clearances (contact-theory.md §3.4): ``1 - t`` in a first static step that
+        resolves them gradually, 0 otherwise (default).
     """
 
     def __init__(self, slave: Surface, master: Union[Surface, Rigid], *,

@@ -102,18 +102,24 @@ class BlockProblem:
 
     Parameters
     ----------
-    residuals : one UFL residual form per body, ``F_i(u_i; v_i)`` (internal minus
-        external virtual work), linear in the test function.
-    u : the bodies' displacement Functions (vector Lagrange spaces of the mesh dimension);
-        their values are the initial guess and, after a solve, the solution.
-    bcs : dolfinx DirichletBCs of any of the bodies' spaces; their current values are
-        written into :attr:`x` by :meth:`apply_bcs`, and their rows are constrained.
-    contacts : :class:`NodeToSurface` pairs built with ``spaces`` = the bodies' spaces in
-        this order (the default for a pair whose slave and master are the first bodies).
-    jacobians : optional Jacobian forms per body (None: ``ufl.derivative(F_i, u_i)``).
-    obstacles : rigid obstacles whose translations are unknowns (pairs built with
-        ``n_obstacles`` = this and their ``obstacle_index``); their rows get the contact
-        forces minus :attr:`f_ext`, or are constrained (:meth:`prescribe`).
+    residuals : sequence of ufl.Form
+        One UFL residual form per body, ``F_i(u_i; v_i)`` (internal minus external virtual
+        work), linear in the test function.
+    u : sequence of dolfinx Functions
+        The bodies' displacements (vector Lagrange spaces of the mesh dimension); their
+        values are the initial guess and, after a solve, the solution.
+    bcs : sequence of dolfinx DirichletBCs
+        On any of the bodies' spaces; their current values are written into :attr:`x` by
+        :meth:`apply_bcs`, and their rows are constrained.
+    contacts : sequence of NodeToSurface
+        Pairs built with ``spaces`` = the bodies' spaces in this order (the default for a
+        pair whose slave and master are the first bodies).
+    jacobians : sequence of ufl.Form or None, optional
+        Jacobian forms per body (None: ``ufl.derivative(F_i, u_i)``).
+    obstacles : int
+        Rigid obstacles whose translations are unknowns (pairs built with ``n_obstacles``
+        = this and their ``obstacle_index``); their rows get the contact forces minus
+        :attr:`f_ext`, or are constrained (:meth:`prescribe`).
     """
 
     def __init__(self, residuals: Sequence[ufl.Form], u: Sequence, bcs: Sequence = (),
@@ -177,7 +183,7 @@ class BlockProblem:
         self._modes: Optional[PETSc.NullSpace] = None
         self.floor = 0.0
         self._spring = 0.0
-        #: checks of an iterate (collective): each returns why it is inadmissible, or None;
+        #: checks of an iterate (collective), each returning why it is inadmissible or None;
         #: the residual of an inadmissible iterate is infinite (Newton fails, and cuts back)
         self.guards: list = []
         #: why the last evaluated iterate was inadmissible ("" if it was not)

@@ -23,6 +23,7 @@ DEB_PACKAGES=(
     python3-dolfinx python3-gmsh python3-scipy python3-pytest python3-venv
     python3-setuptools python3-pip libegl1 calculix-ccx python3-numba
     python3-matplotlib python3-hypothesis python3-tqdm openmpi-bin
+    python3-sphinx python3-myst-parser  # the API reference (docs/), built by scripts/test.sh
     libopenblas0-serial  # optimised BLAS for MUMPS: ~7x faster factorisations than netlib
 )
 

@@ -4,7 +4,10 @@
 # (e.g. `bash scripts/test.sh -k friction -x`); if they name test paths, those
 # replace the default `tests` directory.
 #
-# Exits non-zero if either run fails or collects no tests (pytest exit 5).
+# Then it builds the API reference (docs/, Sphinx) once, warnings as errors.
+#
+# Exits non-zero if either run fails or collects no tests (pytest exit 5), or if
+# the reference has a warning.
 # Each run is stopped after DOLFINX_FRICTION_TEST_TIMEOUT seconds (default
 # 2400): a test that fails on one rank only can leave the other rank waiting
 # in a collective forever.
@@ -77,7 +80,18 @@ if ((mpi_rc != 0)); then
 fi
 describe "MPI (2 ranks)" "$mpi_rc"
 
-if ((serial_rc != 0 || mpi_rc != 0)); then
+DOCS_DIR="$(mktemp -d "${TMPDIR:-/tmp}/dolfinx_friction-docs.XXXXXX")"
+trap 'rm -rf "$MPI_LOG_DIR" "$DOCS_DIR"' EXIT
+echo "test.sh: API reference: sphinx -W --keep-going -b html docs"
+docs_rc=0
+"$PY" -m sphinx -W --keep-going -q -b html docs "$DOCS_DIR" || docs_rc=$?
+if ((docs_rc == 0)); then
+    echo "test.sh: API reference built without warnings"
+else
+    echo "test.sh: API reference FAILED (warnings or errors above)" >&2
+fi
+
+if ((serial_rc != 0 || mpi_rc != 0 || docs_rc != 0)); then
     exit 1
 fi
 echo "test.sh: all test runs passed"

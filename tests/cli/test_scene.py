@@ -13,11 +13,23 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dolfinx_friction.model import BC, Body, ContactPair, Load, Output, Rigid, RigidMotion, Step
+from dolfinx_friction.errors import EXIT_INPUT, classify
+from dolfinx_friction.model import (
+    BC,
+    Body,
+    ContactPair,
+    Load,
+    Output,
+    Rigid,
+    RigidMotion,
+    Scene,
+    Step,
+)
 from dolfinx_friction.scene import (
     SceneError,
     apply_override,
@@ -755,3 +767,115 @@ def test_scene_error_is_a_value_error_with_key():
     assert str(caught.value) == "scene.toml: contact.0.mu = -0.1: must be >= 0"
     assert caught.value.key == "contact.0.mu"
     assert caught.value.source == "scene.toml"
+
+
+# --------------------------------------------------------------------------- the Python API
+
+# (id, a model object built in Python, base, the same value in a scene file, the indexed
+#  table of the file that the Python message names without its index)
+SAME_RULES = [
+    ("mu-negative", lambda: ContactPair("a", "b", mu=-0.1), "example", put("contact.0.mu", -0.1),
+     "contact.0", "contact"),
+    ("mu-bool", lambda: ContactPair("a", "b", mu=True), "example", put("contact.0.mu", True),
+     "contact.0", "contact"),
+    ("law", lambda: ContactPair("a", "b", law="exponental"), "example",
+     put("contact.0.law", "exponental"), "contact.0", "contact"),
+    ("p0-missing", lambda: ContactPair("a", "b", law="exponential"), "rigid2d",
+     drop("contact.0.p0"), "contact.0", "contact"),
+    ("table-decreasing", lambda: ContactPair("a", "b", law="tabular",
+                                             table=((0, 0), (1, 2e-3), (2, 1e-3))),
+     "rigid3d", lambda d: (put("contact.0.law", "tabular")(d),
+                           put("contact.0.table", [[0, 0], [1, 2e-3], [2, 1e-3]])(d)),
+     "contact.0", "contact"),
+    ("self-contact", lambda: ContactPair("block_bottom", "block_bottom"), "example",
+     put("contact.0.master", "block_bottom"), "contact.0", "contact"),
+    ("E-zero", lambda: Body("b", E=0.0, nu=0.3), "example", put("body.0.E", 0.0), "body.0", "body"),
+    ("E-overflows", lambda: Body("b", E=1e307, nu=0.3), "example", put("body.0.E", 1e307),
+     "body.0", "body"),
+    ("nu-nan", lambda: Body("b", E=1.0, nu=math.nan), "example", put("body.0.nu", math.nan),
+     "body.0", "body"),
+    ("degree-float", lambda: Body("b", E=1.0, nu=0.3, degree=1.0), "example",
+     put("body.0.degree", 1.0), "body.0", "body"),
+    ("shape", lambda: Rigid("ball", "box"), "rigid3d", put("rigid.0.shape", "box"),
+     "rigid.0", "rigid"),
+    ("radius-missing", lambda: Rigid("ball", "sphere", center=(0.0, 0.0, 0.0)), "rigid3d",
+     drop("rigid.0.radius"), "rigid.0", "rigid"),
+    ("zero-normal", lambda: Rigid("floor", "plane", point=(0, 0), normal=[0.0, 0.0]), "rigid2d",
+     put("rigid.0.normal", [0.0, 0.0]), "rigid.0", "rigid"),
+    ("u-bad-string", lambda: BC("top", [0, "fixed", 0]), "example",
+     put("step.0.bc.0.u", [0, "fixed", 0]), "step.0.bc.0", "step.bc"),
+    ("u-too-short", lambda: BC("top", [0]), "example", put("step.0.bc.0.u", [0]),
+     "step.0.bc.0", "step.bc"),
+    ("load-both", lambda: Load("side", traction=(0.0, 0.0, 1.0), pressure=1.5), "rigid3d",
+     put("step.1.load.0.traction", [0.0, 0.0, 1.0]), "step.1.load.0", "step.load"),
+    ("motion-neither", lambda: RigidMotion("ball"), "rigid3d", drop("step.0.rigid.0.displacement"),
+     "step.0.rigid.0", "step.rigid"),
+    ("increments-zero", lambda: Step("s", increments=0), "example", put("step.0.increments", 0),
+     "step.0", "step"),
+    ("max_cutbacks-51", lambda: Step("s", max_cutbacks=51), "example",
+     put("step.0.max_cutbacks", 51), "step.0", "step"),
+    ("line_search-int", lambda: Step("s", line_search=1), "example",
+     put("step.0.line_search", 1), "step.0", "step"),
+    ("duplicate-bc", lambda: Step("s", bcs=(BC("foundation_bottom", (0, 0, 0)),
+                                             BC("foundation_bottom", (0, 0, 0)))), "example",
+     put("step.0.bc.1.on", "foundation_bottom"), "step.0", "step"),
+    ("reactions-number", lambda: Output(reactions=("block_top", 3)), "example",
+     put("output.reactions", ["block_top", 3]), "output", "output"),
+]
+
+
+@pytest.mark.parametrize("build, base_name, edit, indexed, table",
+                         [pytest.param(*case[1:], id=case[0]) for case in SAME_RULES])
+def test_python_objects_follow_the_file_rules(build, base_name, edit, indexed, table):
+    """A model object built in Python is refused with the scene file's message, its key
+    path without the table's index (``contact.mu`` for ``contact.0.mu``)."""
+    with pytest.raises(SceneError) as in_file:
+        parse_scene(edited(base_name, edit))
+    with pytest.raises(SceneError) as in_python:
+        build()
+    assert indexed in in_file.value.detail
+    assert in_python.value.detail == in_file.value.detail.replace(indexed, table)
+    assert in_python.value.key == in_file.value.key.replace(indexed, table)
+    assert_one_line(in_python.value)
+
+
+def test_python_scene_checks_name_the_scene_entries():
+    """The checks across a Scene index its tuples, as in a file."""
+    data = edited("example", append("contact", dict(base("example")["contact"][0])))
+    with pytest.raises(SceneError) as in_file:
+        parse_scene(data)
+    scene = parse_scene(edited("example"))
+    with pytest.raises(SceneError) as in_python:
+        Scene(mesh=scene.mesh, bodies=scene.bodies, steps=scene.steps,
+              contacts=scene.contacts * 2)
+    assert str(in_python.value) == str(in_file.value) == "contact.1: same slave and master as " \
+                                                          "contact.0"
+    with pytest.raises(SceneError, match="^body: needs at least 1 Body$"):
+        Scene(mesh=scene.mesh, bodies=(), steps=scene.steps)
+    with pytest.raises(SceneError, match="^output: must be of type Output$"):
+        Scene(mesh=scene.mesh, bodies=scene.bodies, steps=scene.steps, output=None)
+    with pytest.raises(SceneError, match="^step.bc: must be a sequence of BC$"):
+        Step("s", bcs=({"on": "top", "u": [0, 0]},))
+
+
+def test_python_values_are_converted_like_the_file():
+    """A free component is None or "free"; sequences become tuples, numbers floats."""
+    assert BC("top", [0.0, "free"]) == BC("top", [0.0, None]) == BC("top", (0.0, None))
+    assert BC("top", [0, None]).u == (0.0, None) and isinstance(BC("top", [0, 1]).u[0], float)
+    rigid = Rigid("floor", "plane", point=np.zeros(2), normal=np.array([0, 1]))
+    assert rigid.point == (0.0, 0.0) and rigid.normal == (0.0, 1.0)
+    assert Step("s", increments=np.int64(3), bcs=[BC("a", (0, 0))]).bcs == (BC("a", (0, 0)),)
+    assert Output(dir="out", reactions=["a"]) == Output(dir=Path("out"), reactions=("a",))
+    pair = ContactPair("a", "b", law="tabular", table=[[0, 0], [1, 1e-3]])
+    assert pair.table == ((0.0, 0.0), (1.0, 1e-3))
+    assert pair == parse_scene(edited("rigid3d", put("contact.0.law", "tabular"),
+                                      put("contact.0.table", [[0, 0], [1, 1e-3]]),
+                                      put("contact.0.slave", "a"), put("contact.0.master", "b"),
+                                      drop("contact.0.mu"))).contacts[0]
+
+
+def test_python_error_is_an_input_error():
+    """The command line and scripts classify it as bad input (exit status 2), one line."""
+    with pytest.raises(SceneError) as caught:
+        ContactPair(slave="a", master="b", mu=-0.3)
+    assert classify(caught.value) == (EXIT_INPUT, "contact.mu = -0.3: must be >= 0")
