@@ -41,6 +41,7 @@ from dolfinx_friction.fields import BodyField, DofLayout
 from dolfinx_friction.gmsh_io import BodyMesh
 from dolfinx_friction.interaction import ContactInteraction, RigidMaster
 from dolfinx_friction.model import CALCULIX, Body, ContactPair, Rigid
+from dolfinx_friction.validation import SceneError, modulus
 from dolfinx_friction.surfaces import SlaveNodes, master_faces
 
 NO_ELEMENT = -1  #: status of a slave node without a contact element (far from the master)
@@ -343,39 +344,24 @@ class NodeToSurface:
     # ------------------------------------------------------------- set-up
     def _given(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
                pairing_iterations) -> ContactPair:
-        """The parameters as given, checked; defaults still to be resolved."""
-        name = self.name
-        for key, value in (("K", K), ("stick_slope", stick_slope)):
-            if isinstance(value, str) and value != CALCULIX:
-                raise ContactSetupError(f"{name}: {key} must be a number or {CALCULIX!r}, got "
-                                        f"{value!r}")
-        numbers = [(key, value) for key, value in (("K", K), ("sigma_inf", sigma_inf),
-                                                   ("c0", c0), ("mu", mu),
-                                                   ("stick_slope", stick_slope), ("E", E))
-                   if value is not None and value != CALCULIX]
-        for key, value in numbers:
-            if not np.isfinite(value):
-                raise ContactSetupError(f"{name}: {key} must be finite, got {value}")
-        if mu < 0.0:
-            raise ContactSetupError(f"{name}: mu must be >= 0, got {mu}")
-        for key, value in numbers:
-            if key in ("K", "stick_slope", "E") and value <= 0.0:
-                raise ContactSetupError(f"{name}: {key} must be positive, got {value}")
-        if tangent not in ("consistent", "calculix"):
-            raise ContactSetupError(f"{name}: tangent must be 'consistent' or 'calculix', "
-                                    f"got {tangent!r}")
-        if int(pairing_iterations) < 1:
-            raise ContactSetupError(f"{name}: pairing_iterations must be >= 1")
+        """The parameters as given, checked by the scene's rules (the same one-line
+        messages as a scene file's ``[[contact]]``); defaults still to be resolved."""
+        try:
+            given = ContactPair("slave", "master", K=K, sigma_inf=sigma_inf, c0=c0, mu=mu,
+                                stick_slope=stick_slope, tangent=tangent,
+                                pairing_iterations=pairing_iterations)
+            if E is not None:
+                modulus(E, "E")
+        except SceneError as error:
+            raise ContactSetupError(f"{self.name}: {error.detail}") from None
         defaulted = [key for key, value in (("K", K if law is None else 1.0),
                                             ("sigma_inf", sigma_inf if law is None else 1.0),
-                                            ("stick_slope", stick_slope if mu > 0 else 1.0))
+                                            ("stick_slope", stick_slope if given.mu > 0 else 1.0))
                      if value is None or value == CALCULIX]
         if defaulted and E is None:
-            raise ContactSetupError(f"{name}: give E (the slave body's Young's modulus) for "
+            raise ContactSetupError(f"{self.name}: give E (the slave body's Young's modulus) for "
                                     f"the default {', '.join(defaulted)}, or give them")
-        return ContactPair("slave", "master", K=K, sigma_inf=sigma_inf, c0=c0, mu=float(mu),
-                           stick_slope=stick_slope, tangent=tangent,
-                           pairing_iterations=int(pairing_iterations))
+        return given
 
     def _parameters(self, given: ContactPair, law: Optional[Law],
                     E: Optional[float]) -> "_Parameters":

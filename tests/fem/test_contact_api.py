@@ -250,17 +250,19 @@ def test_bad_input_gets_one_clear_line():
          "share facets"),
         (lambda: rigid_plane([0, 0], [0, 0]), "normal is zero"),
         (lambda: rigid_plane([0, np.nan], [0, 1]), "finite"),
-        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=-0.3), "mu must be"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=-0.3),
+         "mu = -0.3: must be >= 0"),
         (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, mu=0.3), "give E"),
         (lambda: NodeToSurface(Surface(V, tags, BOTTOM), rigid_plane([0, 0, 0], [0, 0, 1]),
                                E=E), "3 components"),
         (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, K="ccx"),
-         "K must be a number or 'calculix'"),
+         'K = "ccx": must be a number > 0 or "calculix"'),
         (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=0.3,
-                               stick_slope="stiff"), "stick_slope must be a number"),
+                               stick_slope="stiff"),
+         'stick_slope = "stiff": must be a number > 0 or "calculix"'),
         (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, mu=0.3, K=1e4,
                                stick_slope="calculix"), "give E"),
-        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=1e307), "default K"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=1e307), "is so large"),
     ]
     assert rigid_plane([0, 0], [0, 1e-200]).normal == (0.0, 1.0)  # tiny, not zero
     for make, text in cases:
