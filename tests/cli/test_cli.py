@@ -661,7 +661,8 @@ HISTORY = ["step", "increment", "t", "newton_iterations", "residual", "active", 
            "wall_s"]
 CONTACT_3D = ["step", "increment", "node", "x", "y", "z", "gap", "pressure", "normal_force",
               "tangential_force_x", "tangential_force_y", "tangential_force_z", "slip", "status"]
-SUMMARY_KEYS = {"scene", "scene_sha256", "versions", "mpi_ranks", "dofs", "slave_nodes",
+SUMMARY_KEYS = {"scene", "scene_sha256", "scene_file_sha256", "title", "overrides",
+                "package_version", "resolved", "versions", "mpi_ranks", "dofs", "slave_nodes",
                 "increments", "cutbacks", "newton_iterations", "wall_time_s",
                 "wall_time_per_phase_s", "converged"}
 PHASES = {"setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
