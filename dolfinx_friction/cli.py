@@ -153,7 +153,7 @@ def _show_notices(quiet: bool) -> None:
     handler.setLevel(logging.WARNING if quiet else logging.INFO)
     handler.setFormatter(_NoticeFormatter())
     logger.addHandler(handler)
-    logger.setLevel(logging.INFO)
+    logger.setLevel(min(logger.level or logging.INFO, logging.INFO))  # (--debug: DEBUG)
     logger.propagate = False
 
 
