@@ -14,7 +14,7 @@ from dolfinx_friction.model import Scene
 from dolfinx_friction.output import ResultWriter
 from dolfinx_friction.problem import ContactProblem
 from dolfinx_friction.provenance import provenance
-from dolfinx_friction.scene import default_output_dir, load_scene
+from dolfinx_friction.scene import SceneError, default_output_dir, load_scene
 from dolfinx_friction.solver import ConvergenceError, Increment, RunSummary, Solver
 
 
@@ -42,7 +42,9 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         progress: Optional[Callable[[Increment], None]] = None) -> RunResult:
     """Solve a scene (a :class:`Scene` or a scene file) and write its results.
 
-    ``out`` overrides ``[output] dir``; ``write=False`` keeps everything in memory;
+    ``overrides`` (``KEY=VALUE`` as ``--set`` takes them) apply to a scene file only (a
+    :class:`Scene` is changed with ``dataclasses.replace``); ``out`` overrides
+    ``[output] dir``; ``write=False`` keeps everything in memory;
     ``progress`` is called with every converged increment once it is written (e.g. a
     :class:`~dolfinx_friction.progress.Progress`; on every rank where it is given).
     Nothing is printed: warnings (a penalty too soft for the mesh, nodes that slid off
@@ -56,6 +58,9 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     start, cpu = time.perf_counter(), time.process_time()
     if not isinstance(scene, Scene):
         scene = load_scene(Path(scene), list(overrides))
+    elif overrides:
+        raise SceneError("overrides apply to a scene file; change a Scene object with "
+                         "dataclasses.replace", key="overrides")
     problem = ContactProblem(scene, comm)
     solver = Solver(problem, petsc_options=petsc_options,
                     reuse_factorisation=reuse_factorisation)
