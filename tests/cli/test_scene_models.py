@@ -71,3 +71,13 @@ def test_pressure_follows_the_deformed_face(shared_dir, follower):
           f"{expected:.12g} (lateral stretch {lateral:.5f})")
     assert lateral > 1.04  # the current width differs from the reference one by 5 %
     assert carried == pytest.approx(expected, rel=1e-9)
+
+
+def test_overrides_with_a_scene_object_are_refused():
+    """``--set``-style overrides act on a scene file; given with a Scene object they would
+    be ignored, so they are an input error naming ``overrides``."""
+    scene = parse_scene({"mesh": {"file": "m.msh"}, "body": [{"name": "b", "E": 1.0, "nu": 0.3}],
+                         "step": [{"bc": [{"on": "g", "u": [0.0, 0.0]}]}]})
+    with pytest.raises(SceneError, match="overrides apply to a scene file") as info:
+        run(scene, overrides=["body.0.E=2.0"], write=False)
+    assert info.value.key == "overrides"
