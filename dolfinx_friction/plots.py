@@ -113,6 +113,11 @@ def _flat_as_flat(ax, values: np.ndarray) -> None:
         ax.ticklabel_format(axis="y", useOffset=False)
 
 
+def _float(text: str) -> float:
+    """A number of sweep.csv; NaN for an empty cell (a column another point has)."""
+    return float(text) if text else np.nan
+
+
 def _numbers(values: Sequence[str]) -> Union[np.ndarray, None]:
     try:
         return np.array([float(v) for v in values])
@@ -131,13 +136,14 @@ def plot_sweep(directory: Path, path: Path) -> tuple[Path, int]:
     good = [r for r in rows if r["converged"] == "true"]
     forces = [c for c in header if c.startswith(("R_", "F_"))]
     swept = [k for k in keys if len({r[k] for r in rows}) > 1] or keys[:1]
-    values = {c: np.array([float(r[c]) if r[c] else np.nan for r in good]) for c in forces}
+    values = {c: np.array([_float(r[c]) for r in good]) for c in forces}
     shown = list(_nonzero(values)) if good else []
     n_rows, n_cols = max(len(shown), 1), max(len(swept), 1)
     fig = Figure(figsize=(4.5 * n_cols + 1.5, 2.6 * n_rows + 1.0), layout="constrained")
     axes = np.atleast_2d(fig.subplots(n_rows, n_cols, squeeze=False))
     failed = len(rows) - len(good)
-    fig.suptitle(f"sweep {directory.name}: final values of {len(good)} converged points"
+    fig.suptitle(f"sweep {directory.name}: final values of {len(good)} converged point"
+                 + ("s" if len(good) != 1 else "")
                  + (f" ({failed} failed, not drawn)" if failed else ""), fontsize=10)
     for col, key in enumerate(swept):
         others = [k for k in swept if k != key]
@@ -150,7 +156,7 @@ def plot_sweep(directory: Path, path: Path) -> tuple[Path, int]:
             x = [order.index(r[key]) if numeric is None else float(r[key]) for r in members]
             label = ", ".join(f"{k} = {v}" for k, v in zip(others, combo)) or None
             for row_k, column in enumerate(shown):
-                axes[row_k, col].plot(x, [float(r[column]) for r in members], "o-", ms=4,
+                axes[row_k, col].plot(x, [_float(r[column]) for r in members], "o-", ms=4,
                                       label=label)
         for row_k in range(n_rows):
             ax = axes[row_k, col]

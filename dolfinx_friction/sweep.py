@@ -117,11 +117,17 @@ class Point:
 
     @property
     def overrides(self) -> list[str]:
-        return [f"{key}={value}" for key, value in self.values]
+        """The ``--set`` arguments of the point's run."""
+        return _assignments(self.values)
 
     @property
     def label(self) -> str:
+        """``key=value,key=value``."""
         return ",".join(self.overrides)
+
+
+def _assignments(values: Sequence[tuple[str, str]]) -> list[str]:
+    return [f"{key}={value}" for key, value in values]
 
 
 def _folder_names(labels: list[str]) -> list[str]:
@@ -145,7 +151,7 @@ def plan(scene: Path, options: Sequence[str]) -> list[Point]:
     if twice is not None:
         raise SweepError(f"--set {twice}: the key is given twice")
     combos = [tuple(zip(keys, values)) for values in itertools.product(*(v for _, v in axes))]
-    labels = [",".join(f"{k}={v}" for k, v in combo) for combo in combos]
+    labels = [",".join(_assignments(combo)) for combo in combos]
     points = [Point(n, combo, name) for n, (combo, name)
               in enumerate(zip(combos, _folder_names(labels)), 1)]
     checked: set[Path] = set()
