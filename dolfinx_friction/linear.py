@@ -13,6 +13,15 @@ entries INFOG(20)) decide, at least :data:`PAYBACK` back-solves; small 2D proble
 factorise in milliseconds and are factorised every time.  A fresh factorisation is a
 plain direct solve.  Every decision depends on counts, never on timings: runs are
 repeatable.
+Where the Jacobian splits into a constant bulk stiffness ``K`` and a contact tangent ``C``
+(:meth:`~dolfinx_friction.system.BlockProblem.split`: linear bodies, serial), the solve
+can keep ``K``'s factorisation for the whole run instead (:class:`Condensed`): with ``A``
+the dofs where ``C`` is not zero, ``G = (K^-1)_AA`` (one back-solve per dof the first time
+it is active), ``x = K^-1 (b - P_A w)``, ``(I + C_AA G) w = C_AA (K^-1 b)_A`` (Woodbury's
+identity), as the preconditioner of GMRES on ``J`` to the same tolerance as the kept
+factorisation.  It is used while its flops so far (columns of ``G``, back-solves, dense
+solves; MUMPS's counts) stay below those of the factorisations it replaced plus
+:data:`INVESTMENT` factorisations, else the path above is taken.
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
 default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
 LU factorisation is kept (``reuse`` is ignored for other preconditioners); one by a
@@ -22,6 +31,7 @@ from __future__ import annotations
 
 from typing import Optional
 
+import numpy as np
 from petsc4py import PETSc
 
 DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
@@ -56,9 +66,18 @@ class LinearSolver:
         self._pays = False  # the last factorisation is worth keeping
         self.factorisations = 0
         self.krylov_iterations = 0
+        self._condensed: Optional[Condensed] = None
+        self.condensed_solves = 0
 
-    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> bool:
-        """Solve; returns False when the solver failed."""
+    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, split=None) -> bool:
+        """Solve; returns False when the solver failed.  ``split``: ``J`` as bulk plus
+        contact (:class:`~dolfinx_friction.system.JacobianSplit`), for :class:`Condensed`."""
+        if split is not None and self.reuse and self._counted:
+            if self._condensed is None:
+                self._condensed = Condensed(J.getComm(), self.ksp.getOptionsPrefix())
+            if self._condensed.solve(J, split, b, x):
+                self.condensed_solves += 1
+                return True
         keep = self.reuse and self._pays and J is self._factored and not self._paused
         self._paused = max(self._paused - 1, 0)
         ok = self._attempt(J, b, x, keep)
@@ -89,3 +108,129 @@ def _payback(F: PETSc.Mat) -> float:
     entries = F.getMumpsInfog(20)  # negative: millions
     entries = entries if entries >= 0 else -entries * 1e6
     return F.getMumpsRinfog(3) / (4.0 * max(entries, 1))
+
+
+#: The condensed path may spend at most this many factorisations' flops more than the
+#: factorisations it replaced (the columns of ``G`` are paid before they pay back).
+INVESTMENT = 4
+#: Columns of ``K^-1`` computed per back-solve call (dense right-hand sides).
+COLUMNS_PER_SOLVE = 64
+
+
+class Condensed:
+    """Solves ``(K + C) x = b`` with ``K``'s factorisation kept and ``C`` of low rank.
+
+    ``G``, the entries of ``K^-1`` among the contact surfaces' dofs, is filled column by
+    column as dofs become active and kept while ``K`` (the same matrix object) does.
+    """
+
+    def __init__(self, comm, prefix: str):
+        self.bulk = PETSc.KSP().create(comm)
+        self.bulk.setOptionsPrefix(prefix + "bulk_")
+        self.bulk.setType("preonly")
+        pc = self.bulk.getPC()
+        pc.setType("lu")
+        pc.setFactorSolverType("mumps")
+        self.bulk.setFromOptions()
+        self.outer = PETSc.KSP().create(comm)
+        self.outer.setOptionsPrefix(prefix + "condensed_")
+        self.outer.setType("gmres")
+        self.outer.setTolerances(rtol=1e-12, atol=0.0, max_it=10)
+        pc = self.outer.getPC()
+        pc.setType("python")
+        pc.setPythonContext(self)
+        self.outer.setFromOptions()
+        self._K: Optional[PETSc.Mat] = None
+        self._flops = self._solve_flops = 0.0
+        self._y: Optional[PETSc.Vec] = None
+        self._dofs = np.zeros(0, np.int64)
+        self._G = np.zeros((0, 0))
+        self._known = np.zeros(0, bool)  # per surface dof: its column of G is computed
+        self._column = np.zeros(0, np.int64)  # per surface dof: its column in _G
+        self.columns = 0  # back-solves spent on G
+        self.solves = 0  # solves done, each instead of a factorisation
+        self._spent = 0.0  # flops spent on them (estimated)
+        self.iterations = 0  # GMRES iterations
+
+    def _factorise(self, K: PETSc.Mat) -> bool:
+        self.bulk.setOperators(K, K)
+        self.bulk.setUp()
+        F = self.bulk.getPC().getFactorMatrix()
+        if F.getMumpsInfog(1) < 0:
+            return False
+        entries = F.getMumpsInfog(20)
+        entries = entries if entries >= 0 else -entries * 1e6
+        self._K, self._flops, self._solve_flops = K, F.getMumpsRinfog(3), 4.0 * entries
+        self._dofs = np.zeros(0, np.int64)
+        self._y = K.createVecLeft()
+        return True
+
+    def _set_dofs(self, dofs: np.ndarray) -> None:
+        """The surface dofs ``G`` is kept on (all its columns are forgotten when they
+        change, or when ``K`` is factorised again)."""
+        if not np.array_equal(dofs, self._dofs):
+            self._dofs, self._G = dofs, np.zeros((len(dofs), 0))
+            self._known = np.zeros(len(dofs), bool)
+            self._column = np.zeros(len(dofs), np.int64)
+
+    def _add_columns(self, where: np.ndarray) -> None:
+        """Columns of ``K^-1`` of the surface dofs at ``where``, restricted to the surface
+        dofs, appended to ``G``."""
+        F = self.bulk.getPC().getFactorMatrix()
+        n = self._K.getSize()[0]
+        new = []
+        for start in range(0, len(where), COLUMNS_PER_SOLVE):
+            chunk = where[start:start + COLUMNS_PER_SOLVE]
+            rhs = np.zeros((n, len(chunk)), order="F")
+            rhs[self._dofs[chunk], np.arange(len(chunk))] = 1.0
+            B = PETSc.Mat().createDense((n, len(chunk)), array=rhs, comm=PETSc.COMM_SELF)
+            X = PETSc.Mat().createDense((n, len(chunk)), comm=PETSc.COMM_SELF)
+            X.setUp()
+            F.matSolve(B, X)
+            new.append(X.getDenseArray()[self._dofs].copy())
+            B.destroy()
+            X.destroy()
+        self._column[where] = self._G.shape[1] + np.arange(len(where))
+        self._known[where] = True
+        self._G = np.hstack([self._G] + new)
+        self.columns += len(where)
+
+    def solve(self, J: PETSc.Mat, split, b: PETSc.Vec, x: PETSc.Vec) -> bool:
+        """Solve with the kept bulk factorisation; False (``x`` undefined) when this path
+        does not pay here or did not converge: the caller solves another way."""
+        if split.bulk is not self._K and not self._factorise(split.bulk):
+            return False
+        self._set_dofs(split.dofs)
+        active = np.union1d(split.rows, split.cols)
+        where = np.searchsorted(self._dofs, active).clip(max=max(len(self._dofs) - 1, 0))
+        if len(active) and (not len(self._dofs) or (self._dofs[where] != active).any()):
+            return False  # a coupling off the surfaces: not the split assumed
+        new = where[~self._known[where]]
+        flops = (len(new) + 8) * self._solve_flops + 2.0 / 3.0 * len(active) ** 3
+        if self._spent + flops > self._flops * (self.solves + 1 + INVESTMENT):
+            return False
+        self._spent += flops
+        if len(new):
+            self._add_columns(new)
+        index = np.searchsorted(active, np.stack([split.rows, split.cols]))
+        C = np.zeros((len(active), len(active)))
+        np.add.at(C, (index[0], index[1]), split.values)
+        cols = self._column[where]
+        self._active, self._C = active, C
+        self._M = np.eye(len(active)) + C @ self._G[np.ix_(where, cols)]
+        self.outer.setOperators(J, J)
+        self.outer.solve(b, x)
+        self.iterations += self.outer.getIterationNumber()
+        ok = self.outer.getConvergedReason() > 0
+        self.solves += ok
+        return ok
+
+    def apply(self, pc, r: PETSc.Vec, z: PETSc.Vec) -> None:
+        """``z = (K + C)^-1 r`` (up to round-off): the preconditioner of GMRES."""
+        y = self._y
+        self.bulk.solve(r, y)
+        w = np.linalg.solve(self._M, self._C @ y.getArray(readonly=True)[self._active])
+        values = r.getArray(readonly=True).copy()
+        values[self._active] -= w
+        y.setArray(values)
+        self.bulk.solve(y, z)

@@ -92,7 +92,9 @@ class Newton:
                 break
             A = problem.jacobian(x)
             with problem.timers.measure("linear_solve"):
-                solved = self._solver(problem).solve(A, b, dx)
+                solver = self._solver(problem)
+                split = problem.split() if solver.reuse else None
+                solved = solver.solve(A, b, dx, split)
             if not solved:
                 trace.backtracks.append(0)
                 break

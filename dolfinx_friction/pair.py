@@ -411,6 +411,17 @@ class NodeToSurface:
             self.couplings_version += 1
 
     # ------------------------------------------------------------- assembly
+    def surface_dofs(self) -> np.ndarray:
+        """Sorted global dofs of every node this rank's part of the contact can couple: its
+        slave nodes and its master faces' nodes (a rigid obstacle's translation excluded).
+        In serial, the couplings of every search lie within them."""
+        inter = self._interaction
+        nodes = [inter.slaves.nodes]
+        if not inter.rigid:
+            nodes.append(inter.master.nodes.ravel())
+        nodes = np.unique(np.concatenate(nodes))
+        return (nodes[:, None] * self.gdim + np.arange(self.gdim)).ravel()
+
     def _dofs(self) -> np.ndarray:
         """(n_candidates, nodes * gdim) global dofs of the candidate elements, -1 for the
         nodes of a rigid obstacle (no dofs)."""
