@@ -131,10 +131,6 @@ class CooPattern:
         received = b.exchange(self.comm, np.asarray(values, dtype=float).ravel(), np.float64)
         return np.bincount(b.slots, weights=received, minlength=self.nnz)
 
-    def row_of_slot(self, slots: np.ndarray) -> np.ndarray:
-        """Owned (local) row of each of the given slots."""
-        return self._row_of_slot[slots]
-
     def row_slots(self, local_rows: np.ndarray) -> np.ndarray:
         """Slots of all entries in the given owned rows (local indices)."""
         mask = np.zeros(self.n_owned, dtype=bool)

@@ -18,8 +18,8 @@ Where the Jacobian splits into a constant bulk stiffness ``K`` and a contact tan
 can keep ``K``'s factorisation for the whole run instead (:class:`Condensed`): with ``A``
 the dofs where ``C`` is not zero, ``G = (K^-1)_AA`` (one back-solve per dof the first time
 it is active), ``x = K^-1 (b - P_A w)``, ``(I + C_AA G) w = C_AA (K^-1 b)_A`` (Woodbury's
-identity), as the preconditioner of GMRES on ``J`` to the same tolerance as the kept
-factorisation.  It is used while its flops so far (columns of ``G``, back-solves, dense
+identity), as the preconditioner of GMRES on ``J`` (applied as ``K v + C v``, never
+assembled) to the same tolerance as the kept factorisation.  It is used while its flops so far (columns of ``G``, back-solves, dense
 solves; MUMPS's counts) stay below those of the factorisations it replaced plus
 :data:`INVESTMENT` factorisations, else the path above is taken.
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
@@ -69,15 +69,21 @@ class LinearSolver:
         self._condensed: Optional[Condensed] = None
         self.condensed_solves = 0
 
-    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, split=None) -> bool:
-        """Solve; returns False when the solver failed.  ``split``: ``J`` as bulk plus
-        contact (:class:`~dolfinx_friction.system.JacobianSplit`), for :class:`Condensed`."""
-        if split is not None and self.reuse and self._counted:
-            if self._condensed is None:
-                self._condensed = Condensed(J.getComm(), self.ksp.getOptionsPrefix())
-            if self._condensed.solve(J, split, b, x):
-                self.condensed_solves += 1
-                return True
+    def solve_split(self, split, b: PETSc.Vec, x: PETSc.Vec) -> Optional[bool]:
+        """Solve with the Jacobian given as bulk plus contact
+        (:class:`~dolfinx_friction.system.JacobianSplit`) by :class:`Condensed`; None when
+        that does not pay (or failed): then :meth:`solve` with the assembled Jacobian."""
+        if not (self.reuse and self._counted):
+            return None
+        if self._condensed is None:
+            self._condensed = Condensed(b.getComm(), self.ksp.getOptionsPrefix())
+        if not self._condensed.solve(split, b, x):
+            return None
+        self.condensed_solves += 1
+        return True
+
+    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> bool:
+        """Solve; returns False when the solver failed."""
         keep = self.reuse and self._pays and J is self._factored and not self._paused
         self._paused = max(self._paused - 1, 0)
         ok = self._attempt(J, b, x, keep)
@@ -141,6 +147,7 @@ class Condensed:
         pc.setPythonContext(self)
         self.outer.setFromOptions()
         self._K: Optional[PETSc.Mat] = None
+        self._J: Optional[PETSc.Mat] = None
         self._flops = self._solve_flops = 0.0
         self._y: Optional[PETSc.Vec] = None
         self._dofs = np.zeros(0, np.int64)
@@ -161,6 +168,7 @@ class Condensed:
         entries = F.getMumpsInfog(20)
         entries = entries if entries >= 0 else -entries * 1e6
         self._K, self._flops, self._solve_flops = K, F.getMumpsRinfog(3), 4.0 * entries
+        self._J = None  # the operator K + C
         self._dofs = np.zeros(0, np.int64)
         self._y = K.createVecLeft()
         return True
@@ -195,7 +203,7 @@ class Condensed:
         self._G = np.hstack([self._G] + new)
         self.columns += len(where)
 
-    def solve(self, J: PETSc.Mat, split, b: PETSc.Vec, x: PETSc.Vec) -> bool:
+    def solve(self, split, b: PETSc.Vec, x: PETSc.Vec) -> bool:
         """Solve with the kept bulk factorisation; False (``x`` undefined) when this path
         does not pay here or did not converge: the caller solves another way."""
         if split.bulk is not self._K and not self._factorise(split.bulk):
@@ -218,12 +226,22 @@ class Condensed:
         cols = self._column[where]
         self._active, self._C = active, C
         self._M = np.eye(len(active)) + C @ self._G[np.ix_(where, cols)]
-        self.outer.setOperators(J, J)
+        if self._J is None:
+            self._J = PETSc.Mat().createPython(self._K.getSizes(), self, comm=self._K.getComm())
+            self._J.setUp()
+        self.outer.setOperators(self._J, self._J)
         self.outer.solve(b, x)
         self.iterations += self.outer.getIterationNumber()
         ok = self.outer.getConvergedReason() > 0
         self.solves += ok
         return ok
+
+    def mult(self, mat, v: PETSc.Vec, y: PETSc.Vec) -> None:
+        """``y = (K + C) v``: the Jacobian, without assembling it."""
+        self._K.mult(v, y)
+        values = y.getArray().copy()
+        values[self._active] += self._C @ v.getArray(readonly=True)[self._active]
+        y.setArray(values)
 
     def apply(self, pc, r: PETSc.Vec, z: PETSc.Vec) -> None:
         """``z = (K + C)^-1 r`` (up to round-off): the preconditioner of GMRES."""

@@ -90,11 +90,14 @@ class Newton:
                 break
             if it == self.max_iterations:
                 break
-            A = problem.jacobian(x)
+            solver = self._solver(problem)
+            split = problem.split() if solver.reuse else None
             with problem.timers.measure("linear_solve"):
-                solver = self._solver(problem)
-                split = problem.split() if solver.reuse else None
-                solved = solver.solve(A, b, dx, split)
+                solved = solver.solve_split(split, b, dx) if split is not None else None
+            if solved is None:  # no split, or it did not pay: the whole Jacobian
+                A = problem.jacobian(x)
+                with problem.timers.measure("linear_solve"):
+                    solved = solver.solve(A, b, dx)
             if not solved:
                 trace.backtracks.append(0)
                 break
