@@ -20,9 +20,10 @@ the dofs where ``C`` is not zero, ``G = (K^-1)_AA`` (one back-solve per dof the 
 it is active), ``x = K^-1 (b - P_A w)``, ``(I + C_AA G) w = C_AA (K^-1 b)_A`` (Woodbury's
 identity), as the preconditioner of Richardson iterations on ``J`` (applied as
 ``K v + C v``, never assembled) until the true residual is below 1e-10 ``|b|`` (one
-iteration on the Hertz benchmark; reactions as with LU to 1e-12).  It is used while its flops so far (columns of ``G``, back-solves, dense
-solves; MUMPS's counts) stay below those of the factorisations it replaced plus
-:data:`INVESTMENT` factorisations, else the path above is taken.
+iteration on the Hertz benchmark; reactions as with LU to 1e-12).  It is used while its
+flops so far (columns of ``G``, back-solves, dense solves; MUMPS's counts) stay below
+those of the factorisations it replaced plus :data:`INVESTMENT` factorisations, else the
+path above is taken.  Serial only: under MPI the path above.
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
 default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
 LU factorisation is kept (``reuse`` is ignored for other preconditioners); one by a
