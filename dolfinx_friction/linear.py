@@ -154,7 +154,6 @@ class Condensed:
         self._K: Optional[PETSc.Mat] = None
         self._J: Optional[PETSc.Mat] = None
         self._Z: Optional[list] = None
-        self._ZA: Optional[np.ndarray] = None
         self._flops = self._solve_flops = 0.0
         self._y: Optional[PETSc.Vec] = None
         self._dofs = np.zeros(0, np.int64)
@@ -239,12 +238,9 @@ class Condensed:
         np.add.at(C, (index[0], index[1]), split.values)
         cols = self._column[where]
         self._active, self._C = active, C
-        self._ZA = None
-        if self._Z is not None:
-            if len(self._Z) > 1:
-                self._Z = [np.hstack(self._Z)]
-            self._ZA = (self._Z[0][:, cols] if self._Z
-                        else np.zeros((self._K.getSize()[0], 0)))
+        self._cols = cols
+        if self._Z is not None and len(self._Z) > 1:
+            self._Z = [np.hstack(self._Z)]
         self._M = np.eye(len(active)) + C @ self._G[np.ix_(where, cols)]
         if self._J is None:
             self._J = PETSc.Mat().createPython(self._K.getSizes(), self, comm=self._K.getComm())
@@ -268,8 +264,10 @@ class Condensed:
         y = self._y
         self.bulk.solve(r, y)
         w = np.linalg.solve(self._M, self._C @ y.getArray(readonly=True)[self._active])
-        if self._ZA is not None:  # K^-1 (r - P_A w) = y - (K^-1 P_A) w
-            z.setArray(y.getArray(readonly=True) - self._ZA @ w)
+        if self._Z:  # K^-1 (r - P_A w) = y - (K^-1 P_A) w, from the kept columns
+            w_all = np.zeros(self._Z[0].shape[1])
+            w_all[self._cols] = w
+            z.setArray(y.getArray(readonly=True) - self._Z[0] @ w_all)
             return
         values = r.getArray(readonly=True).copy()
         values[self._active] -= w
