@@ -152,6 +152,7 @@ class Condensed:
         pc.setPythonContext(self)
         self.outer.setFromOptions()
         self._K: Optional[PETSc.Mat] = None
+        self._regular = False  # K's factorisation succeeded
         self._J: Optional[PETSc.Mat] = None
         self._Z: Optional[list] = None
         self._flops = self._solve_flops = 0.0
@@ -166,6 +167,8 @@ class Condensed:
         self.iterations = 0  # Richardson iterations
 
     def _factorise(self, K: PETSc.Mat) -> bool:
+        """Factorise ``K``; whether MUMPS succeeded."""
+        self._K = K
         self.bulk.setOperators(K, K)
         self.bulk.setUp()
         F = self.bulk.getPC().getFactorMatrix()
@@ -219,7 +222,9 @@ class Condensed:
     def solve(self, split, b: PETSc.Vec, x: PETSc.Vec) -> bool:
         """Solve with the kept bulk factorisation; False (``x`` undefined) when this path
         does not pay here or did not converge: the caller solves another way."""
-        if split.bulk is not self._K and not self._factorise(split.bulk):
+        if split.bulk is not self._K:
+            self._regular = self._factorise(split.bulk)
+        if not self._regular:  # e.g. a body held by the contact alone: K is singular
             return False
         self._set_dofs(split.dofs)
         active = np.union1d(split.rows, split.cols)

@@ -9,7 +9,8 @@ from petsc4py import PETSc
 from dolfinx_friction.api import run
 from dolfinx_friction.assembly import CooPattern
 from dolfinx_friction.contact.shapes import face_areas
-from dolfinx_friction.model import BC, Body, ContactPair, Rigid, RigidMotion, Scene, Step
+from dolfinx_friction.model import (BC, Body, ContactPair, Load, Rigid, RigidMotion, Scene,
+                                    Step)
 from dolfinx_friction.problem import ContactProblem
 from dolfinx_friction.solver import Solver
 from dolfinx_friction.surfaces import SlaveNodes, master_faces
@@ -162,6 +163,26 @@ def test_condensed_solve_gives_the_direct_answer(shared_dir, mu):
         for group in b.reactions:
             R = np.abs(b.reactions[group]).max()  # measured: 1e-14 R
             np.testing.assert_allclose(a.reactions[group], b.reactions[group], atol=1e-10 * R)
+    assert [i.iterations for i in condensed] == [i.iterations for i in direct]
+
+
+def test_condensed_solve_falls_back_when_the_bulk_is_singular(shared_dir):
+    """A block held by the contact alone (pressure on its top): its bulk stiffness is
+    singular, the condensed path does not converge and the factorisation path answers,
+    with the reactions and iterations of factorising every Jacobian."""
+    mesh = meshes.two_boxes(shared_dir / "deep_boxes.msh", n_foundation=(5, 5, 10))
+    scene = Scene(
+        mesh=mesh, bodies=(Body("block", 1000.0, 0.3), Body("foundation", 2000.0, 0.25)),
+        contacts=(ContactPair("block_bottom", "foundation_top", mu=0.3),),
+        steps=(Step("press", increments=2, bcs=(BC("foundation_bottom", (0.0, 0.0, 0.0)),),
+                    loads=(Load("block_top", pressure=10.0),)),))
+    condensed, solver = _solve(scene)
+    direct, _ = _solve(scene, reuse_factorisation=False)
+    assert solver.linear.condensed_solves == 0
+    for a, b in zip(condensed, direct):
+        R = np.abs(b.reactions["foundation_bottom"]).max()  # measured: 1e-15 R
+        np.testing.assert_allclose(a.reactions["foundation_bottom"],
+                                   b.reactions["foundation_bottom"], atol=1e-10 * R)
     assert [i.iterations for i in condensed] == [i.iterations for i in direct]
 
 
