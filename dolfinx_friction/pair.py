@@ -522,6 +522,19 @@ class NodeToSurface:
         keep = dofs >= 0
         return K[keep[:, :, None] & keep[:, None, :]]
 
+    def element_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Global ``(rows, cols, values)`` of the current elements' tangents only (what
+        :meth:`coupling_values` holds where it is not zero by construction; a rigid
+        obstacle's rows and columns left out; no bcs)."""
+        el = self._evaluated()
+        dofs = self._dofs()[el.candidate]
+        n, nd = dofs.shape
+        K = el.result.K.reshape(n, nd, nd)
+        rows = np.broadcast_to(dofs[:, :, None], K.shape)
+        cols = np.broadcast_to(dofs[:, None, :], K.shape)
+        keep = (dofs >= 0)[:, :, None] & (dofs >= 0)[:, None, :]
+        return rows[keep], cols[keep], K[keep]
+
     def register_matrix(self, A: PETSc.Mat) -> None:
         """Declare that ``A``'s pattern holds the current couplings (done by
         :func:`create_matrix`; for a matrix preallocated some other way)."""

@@ -190,7 +190,7 @@ class BlockProblem:
         self._bulk_data: Optional[np.ndarray] = None  # bulk Jacobian values (last, or constant)
         self._bc_slots: Optional[tuple] = None
         self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
-        self._couplings: dict = {}  # contact -> (couplings version, couplings, surface dofs)
+        self._surface_dofs: Optional[np.ndarray] = None  # of all contacts (fixed in serial)
         self._modes: Optional[PETSc.NullSpace] = None
         self.floor = 0.0
         self._spring = 0.0
@@ -422,16 +422,13 @@ class BlockProblem:
         with self.timers.measure("contact_assembly"):
             free = np.ones(self.layout.n_owned * self.gdim, bool)
             free[rows] = False
-            entries = []
-            for i, c in enumerate(self.contacts):
-                if self._couplings.get(i, (None,))[0] != c.couplings_version:
-                    self._couplings[i] = (c.couplings_version, *c.couplings(), c.surface_dofs())
-                _, r, k, dofs = self._couplings[i]
-                v = c.coupling_values()
-                keep = (v != 0.0) & free[r]
-                entries.append((r[keep], k[keep], v[keep], dofs))
-            r, k, v, dofs = (np.concatenate(e) for e in zip(*entries))
-        return JacobianSplit(self._bulk_bc[1], np.unique(dofs), r, k, v)
+            entries = [c.element_entries() for c in self.contacts]
+            r, k, v = (np.concatenate(e) for e in zip(*entries))
+            keep = (v != 0.0) & free[r]
+            if self._surface_dofs is None:
+                self._surface_dofs = np.unique(np.concatenate(
+                    [c.surface_dofs() for c in self.contacts]))
+        return JacobianSplit(self._bulk_bc[1], self._surface_dofs, r[keep], k[keep], v[keep])
 
     def _rigid_spring(self, base: np.ndarray) -> float:
         """1e-12 of the largest bulk diagonal entry (found once)."""
