@@ -176,7 +176,7 @@ class Condensed:
             return False
         entries = F.getMumpsInfog(20)
         entries = entries if entries >= 0 else -entries * 1e6
-        self._K, self._flops, self._solve_flops = K, F.getMumpsRinfog(3), 4.0 * entries
+        self._flops, self._solve_flops = F.getMumpsRinfog(3), 4.0 * entries
         self._entries = entries  # whole columns of K^-1 are kept while they fit
         self._J = None  # the operator K + C
         self._dofs = np.zeros(0, np.int64)
@@ -251,7 +251,10 @@ class Condensed:
             self._J = PETSc.Mat().createPython(self._K.getSizes(), self, comm=self._K.getComm())
             self._J.setUp()
         self.outer.setOperators(self._J, self._J)
-        self.outer.solve(b, x)
+        try:
+            self.outer.solve(b, x)
+        except (PETSc.Error, np.linalg.LinAlgError):  # I + C G singular: J is, or nearly
+            return False
         self.iterations += self.outer.getIterationNumber()
         ok = self.outer.getConvergedReason() > 0
         self.solves += ok
