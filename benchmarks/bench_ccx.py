@@ -47,11 +47,16 @@ def ccx_iterations(log: str) -> tuple[int, int]:
 
 
 def one_size(n: int) -> dict:
+    return {"n": n, **compare(C.scene(n), GROUPS, f"boxes_n{n}")}
+
+
+def compare(scene, groups, label: str) -> dict:
+    """Both codes on ``scene``: times, iterations and every increment's reactions of
+    ``groups`` (``|R - R_ccx| / |R_ccx|``)."""
     from dolfinx_friction import calculix
-    scene = C.scene(n)
-    row = {"n": n}
+    row = {"case": label}
     # ---- CalculiX
-    inp = B.work_dir("ccx") / f"boxes_n{n}.inp"
+    inp = B.work_dir("ccx") / f"{label}.inp"
     t0 = time.perf_counter()
     calculix.write_inp(scene, inp)
     row["write_inp"] = time.perf_counter() - t0
@@ -67,21 +72,195 @@ def one_size(n: int) -> dict:
     # ---- reactions, increment by increment
     diffs = []
     for inc in result.increments:
-        theirs = ccx.reactions.get(inc.step, {}).get(inc.increment)
+        # ccx runs fixed increments: its k-th ends at k / N of the step; ours may have cut
+        # back (then its numbers run ahead): compare at the same pseudo-time
+        n = scene.steps[inc.step].increments
+        k = round((inc.t - inc.step) * n)
+        theirs = (ccx.reactions.get(inc.step, {}).get(k)
+                  if abs((inc.t - inc.step) * n - k) < 1e-9 else None)
         if theirs is None:
             diffs.append({"step": inc.step, "increment": inc.increment, "missing": True})
             continue
-        for g in GROUPS:
+        for g in groups:
             ours, ref = np.asarray(inc.reactions[g]), np.asarray(theirs[g])
+            big = np.abs(ref) > 1e-6 * np.linalg.norm(ref)
             diffs.append({"step": inc.step, "increment": inc.increment, "group": g,
                           "ours": ours.tolist(), "ccx": ref.tolist(),
                           "rel": float(np.linalg.norm(ours - ref) / np.linalg.norm(ref)),
                           "rel_x": (float(abs(ours[0] - ref[0]) / abs(ref[0]))
-                                    if abs(ref[0]) > 1e-6 * np.linalg.norm(ref) else None),
-                          "rel_z": float(abs(ours[2] - ref[2]) / abs(ref[2]))})
+                                    if big[0] else None),
+                          "rel_z": float(abs(ours[-1] - ref[-1]) / abs(ref[-1]))
+                          if big[-1] else None})
     row["diffs"] = diffs
     row["worst"] = max((d["rel"] for d in diffs if "rel" in d), default=float("nan"))
+    row["reactions"] = [{g: list(map(float, inc.reactions[g])) for g in groups}
+                        for inc in result.increments]
     return row
+
+
+# ----------------------------------------------------------------------------- kinds
+#: Hertz cylinder on a block (demos/hertz_cylinder.py's geometry and mesh), one layer thick
+HERTZ_K, HERTZ_INCREMENTS, HERTZ_PRESS, LAYER = 1.0e7, 10, 0.25, 0.1
+HERTZ_SIZES, HERTZ_QUICK = (0.08, 0.05, 0.04), (0.08,)
+IRONING_SIZES, IRONING_QUICK = ((20.0, 120, 24, 40),), ((10.0, 40, 6, 32),)
+HERTZ_GROUPS, IRONING_GROUPS = ("cylinder_top", "block_bottom"), ("die_top", "block_bottom")
+
+
+def hertz_scene(h: float, three_d: bool):
+    """The Hertz line contact of ``demos/hertz_cylinder.py`` (quarter model, contact-zone
+    element size ``h``), K = 1e7, frictionless, pressed 0.25 in 10 increments: in 2D
+    (quadrilaterals, plane strain) or as its twin of one layer of hexahedra (the same
+    quadrilaterals extruded by ``LAYER``, ``u_z = 0`` on both faces)."""
+    import _meshes as M
+    from dolfinx_friction.model import BC, Body, ContactPair, Output, Scene, Step
+    two = B.work_dir("ccx") / f"hertz_h{h}_2d.msh"
+    if not two.exists():
+        B.demo_module("hertz_cylinder").build_mesh(two, h_contact=h)
+    mesh = two
+    if three_d:
+        mesh = two.with_name(f"hertz_h{h}_3d.msh")
+        if not mesh.exists():
+            M.one_layer(two, mesh, LAYER)
+
+    def u(*c):
+        return c + (None,) if three_d else c
+
+    bcs = (BC("block_bottom", u(0.0, 0.0)), BC("block_symmetry", u(0.0, None)),
+           BC("cylinder_symmetry", u(0.0, None)), BC("cylinder_top", u(0.0, -HERTZ_PRESS)))
+    if three_d:
+        bcs += (BC("block_faces", (None, None, 0.0)), BC("cylinder_faces", (None, None, 0.0)))
+    return Scene(mesh=mesh, bodies=(Body("cylinder", 1000.0, 0.3), Body("block", 1000.0, 0.3)),
+                 contacts=(ContactPair("cylinder_surface", "block_top", K=HERTZ_K),),
+                 steps=(Step("press", increments=HERTZ_INCREMENTS, bcs=bcs),),
+                 output=Output(fields=False, contact_table=False, reactions=HERTZ_GROUPS))
+
+
+def ironing_scene(size):
+    """The one-layer plane-strain ironing of tests/verification/test_calculix_nlgeom.py,
+    linear bodies, mu = 0.3, pressed in 10 and dragged in 40 increments."""
+    from tests.verification import test_calculix_nlgeom as T
+    length, nx, ny, n_arc = size
+    path = B.work_dir("ccx") / f"ironing_{nx}x{ny}.msh"
+    if not path.exists():
+        T.ironing_mesh(path, length=length, nx=nx, ny=ny, bias=0.9 if ny > 6 else 0.75,
+                       n_arc=n_arc)
+    return T.ironing_scene(path, "linear", press_increments=10, drag_increments=40)
+
+
+def kind_rows(kind: str, quick: bool):
+    """The rows of one problem kind, one at a time (both codes; Hertz also ours in true
+    2D).  A case ccx does not finish is a row with ``ccx_error`` and ours alone."""
+    from dolfinx_friction.calculix import CcxError
+    if kind == "hertz":
+        cases = [(h, lambda h=h: hertz_scene(h, True), HERTZ_GROUPS, f"hertz_h{h}")
+                 for h in (HERTZ_QUICK if quick else HERTZ_SIZES)]
+    elif kind == "ironing":
+        cases = [(size[1], lambda size=size: ironing_scene(size), IRONING_GROUPS,
+                  f"ironing_{size[1]}x{size[2]}")
+                 for size in (IRONING_QUICK if quick else IRONING_SIZES)]
+    elif kind == "small3d":
+        cases = [(2, lambda: C.scene(2, slide_increments=10), GROUPS, "small3d_n2")]
+    else:
+        raise SystemExit(f"--kinds: unknown kind {kind!r} (hertz, ironing, small3d)")
+    for size, make, groups, label in cases:
+        try:
+            row = {"kind": kind, "size": size, **compare(make(), groups, label)}
+        except CcxError as exc:
+            _, ours = B.timed_run(make())
+            row = {"kind": kind, "size": size, "ours": ours,
+                   "ccx_error": str(exc).splitlines()[-1].strip()}
+        if kind == "hertz":
+            result, row["ours_2d"] = B.timed_run(hertz_scene(size, False))
+            if "reactions" in row:
+                # 2D reactions are per unit thickness: the twin carries LAYER times them
+                twin = [np.asarray(r["cylinder_top"][:2]) for r in row["reactions"]]
+                flat = [LAYER * np.asarray(i.reactions["cylinder_top"])
+                        for i in result.increments]
+                row["twin_rel"] = max(float(np.linalg.norm(a - b) / np.linalg.norm(a))
+                                      for a, b in zip(twin, flat))
+        yield row
+
+
+def kinds_chart(rows, machine) -> Path:
+    """CPU time against dofs, both codes, one panel per problem kind."""
+    plt = B.pyplot()
+    kinds = list(dict.fromkeys(r["kind"] for r in rows))
+    fig, axes = plt.subplots(1, len(kinds), figsize=(4.5 * len(kinds), 4.2), dpi=100,
+                             squeeze=False)
+    for ax, kind in zip(axes[0], kinds):
+        mine = [r for r in rows if r["kind"] == kind]
+        x = [r["ours"]["dofs"] for r in mine]
+        ax.loglog(x, [r["ours"]["cpu"] for r in mine], "o-", color="#1f77b4",
+                  label="dolfinx_friction (3D)")
+        both = [r for r in mine if "ccx_cpu" in r]
+        ax.loglog([r["ours"]["dofs"] for r in both], [r["ccx_cpu"] for r in both], "s-",
+                  color="#d62728", label="CalculiX (3D)")
+        flat = [r for r in mine if "ours_2d" in r]
+        if flat:
+            ax.loglog([r["ours_2d"]["dofs"] for r in flat], [r["ours_2d"]["cpu"] for r in flat],
+                      "^--", color="#2ca02c", label="dolfinx_friction, true 2D")
+        ax.set_title(kind, fontsize=10)
+        ax.set_xlabel("dofs")
+        ax.set_ylabel("CPU seconds (whole analysis)")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8)
+    fig.suptitle(f"against CalculiX, one core each (load {machine['load'][0]:.1f} on "
+                 f"{machine['nproc']} cores, commit {machine['commit']})", fontsize=9)
+    fig.tight_layout()
+    path = B.FIGURES / "ccx_kinds.png"
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def kinds_report(rows, machine, load_end) -> str:
+    from dolfinx_friction import calculix
+    out = [
+        "`benchmarks/bench_ccx.py --kinds hertz,ironing,small3d`: the problems CalculiX users "
+        "run (issue 14), one `Scene` per case solved by dolfinx_friction and written by "
+        f"`calculix.write_inp` for `{calculix.ccx_executable()}` (single-threaded, SPOOLES), "
+        "one after the other in this process; an untimed warm-up run first.",
+        "",
+        "* hertz: `demos/hertz_cylinder.py`'s quarter cylinder on a block (its `build_mesh`, "
+        "contact-zone size h), extruded by one layer of hexahedra (`_meshes.one_layer`, "
+        f"thickness {LAYER}, u_z = 0 on both faces), K = 1e7, frictionless, pressed "
+        f"{HERTZ_PRESS} in {HERTZ_INCREMENTS} increments; '2D' = the same quadrilaterals in "
+        "plane strain (ours only: the deck writer has no 2D elements), its reactions x "
+        "thickness against the twin's.",
+        "* ironing: `test_calculix_nlgeom.ironing_mesh` (one hexahedron layer), linear bodies, "
+        "mu = 0.3, press 10 + drag 40 increments.",
+        "* small3d: the block on a foundation of `bench_cost.py` at n = 2, press 1 + slide 10 "
+        "increments, mu = 0.3.",
+        f"* {B.machine_line(machine, load_end)}",
+        "* ours = the whole `run()`; ccx = the whole `ccx` process.  CPU: our process / the "
+        "ccx child (`RUSAGE_CHILDREN`); the machine's 2 cores are shared with other jobs, so "
+        "the CPU ratio is the load-independent one.",
+        "",
+    ]
+    trs = []
+    for r in rows:
+        o = r["ours"]
+        two = r.get("ours_2d")
+        if "ccx_error" in r:
+            trs.append([r["kind"], r["size"], f"{o['dofs']:,}",
+                        f"{o['newton']} / {o['increments']}", f"ccx stops: {r['ccx_error']}",
+                        B.fmt_s(o["cpu"]), "-", "-", B.fmt_s(o["wall"]), "-", "-", "-",
+                        "-" if two is None else f"{two['dofs']:,}: {B.fmt_s(two['cpu'])} s CPU",
+                        f"{o['load'][0]:.1f}"])
+            continue
+        trs.append([r["kind"], r["size"], f"{o['dofs']:,}", f"{o['newton']} / {o['increments']}",
+                    f"{r['ccx_solves']} / {r['ccx_increments']}",
+                    B.fmt_s(o["cpu"]), B.fmt_s(r["ccx_cpu"]), f"{o['cpu'] / r['ccx_cpu']:.2f}",
+                    B.fmt_s(o["wall"]), B.fmt_s(r["ccx_wall"]),
+                    f"{o['wall'] / r['ccx_wall']:.2f}", f"{100 * r['worst']:.3f}",
+                    "-" if two is None else (f"{two['dofs']:,}: {B.fmt_s(two['cpu'])} s CPU, "
+                                             f"{two['newton']} its, dR {r['twin_rel']:.1e}"),
+                    f"{r['ccx_load'][0]:.1f} / {o['load'][0]:.1f}"])
+    out.append(B.table(["kind", "size", "dofs", "our its / incs", "ccx solves / incs",
+                        "our CPU [s]", "ccx CPU [s]", "CPU ratio", "our wall [s]",
+                        "ccx wall [s]", "wall ratio", "max dR/R [%]", "ours in 2D",
+                        "load ccx / ours"], trs))
+    return "\n".join(out)
 
 
 def chart(rows, machine) -> Path:
@@ -185,6 +364,8 @@ def main(argv=None) -> None:
     ap.add_argument("--sizes")
     ap.add_argument("--no-results", action="store_true")
     ap.add_argument("--json", help="also write the measured rows to this file")
+    ap.add_argument("--kinds", help="comma-separated problem kinds instead of the block on a "
+                    "foundation: hertz, ironing, small3d")
     args = ap.parse_args(argv)
     from dolfinx_friction import calculix
     if not calculix.ccx_available():
@@ -195,6 +376,27 @@ def main(argv=None) -> None:
     machine = B.machine()
     # warm-up (untimed): form compilation and imports of our side
     B.timed_run(C.scene(2))
+    if args.kinds:
+        rows = []
+        for kind in args.kinds.split(","):
+            for r in kind_rows(kind, args.quick):
+                rows.append(r)
+                o = r["ours"]
+                print(f"{kind} {r['size']} dofs={o['dofs']}: ours {o['newton']} its cpu "
+                      f"{o['cpu']:.1f} s wall {o['wall']:.1f} s phases {o['phases']} | ccx "
+                      f"{r.get('ccx_solves')} solves cpu {r.get('ccx_cpu')} s wall "
+                      f"{r.get('ccx_wall')} s {r.get('ccx_error', '')} | max dR/R "
+                      f"{r.get('worst')} | 2D {r.get('ours_2d', {}).get('cpu')} | load "
+                      f"{B.load_average():.1f}", flush=True)
+                if args.json:
+                    Path(args.json).write_text(json.dumps(rows, indent=1))
+        text = kinds_report(rows, machine, B.load_average())
+        figure = kinds_chart(rows, machine)
+        text += f"\n\nChart (CPU time against dofs): `benchmarks/figures/{figure.name}`."
+        print(text)
+        if not args.no_results:
+            B.write_section("Side by side with CalculiX: the problems its users run", text)
+        return 0
     rows = []
     for n in sizes:
         r = one_size(n)

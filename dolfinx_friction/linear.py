@@ -17,6 +17,17 @@ A direct solve is checked: a factorisation that failed (a zero pivot) or a solut
 leaves a linear residual above :data:`SINGULAR` of the right-hand side means a singular
 Jacobian (a body that only the contact held, and the contact opened): the solve fails
 with that reason (:attr:`LinearSolver.failure`), and Newton with it.
+Where the Jacobian splits into a constant bulk stiffness ``K`` and a contact tangent ``C``
+(:meth:`~dolfinx_friction.system.BlockProblem.split`: linear bodies, serial), the solve
+can keep ``K``'s factorisation for the whole run instead (:class:`Condensed`): with ``A``
+the dofs where ``C`` is not zero, ``G = (K^-1)_AA`` (one back-solve per dof the first time
+it is active), ``x = K^-1 (b - P_A w)``, ``(I + C_AA G) w = C_AA (K^-1 b)_A`` (Woodbury's
+identity), as the preconditioner of Richardson iterations on ``J`` (applied as
+``K v + C v``, never assembled) until the true residual is below 1e-10 ``|b|`` (one
+iteration on the Hertz benchmark; reactions as with LU to 1e-12).  It is used while its
+flops so far (columns of ``G``, back-solves, dense solves; MUMPS's counts) stay below
+those of the factorisations it replaced plus :data:`INVESTMENT` factorisations, else the
+path above is taken.  Serial only: under MPI the path above.
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
 default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
 LU factorisation is kept (``reuse`` is ignored for other preconditioners); one by a
@@ -26,6 +37,7 @@ from __future__ import annotations
 
 from typing import Optional
 
+import numpy as np
 from petsc4py import PETSc
 
 from dolfinx_friction import compat
@@ -67,6 +79,8 @@ class LinearSolver:
         self.krylov_iterations = 0
         #: why the last solve failed ("" if it did not)
         self.failure = ""
+        self._condensed: Optional[Condensed] = None
+        self.condensed_solves = 0
 
     def settings(self) -> dict:
         """The solver in use: ``ksp_type`` (``gmres`` on a kept factorisation, when one is
@@ -79,6 +93,19 @@ class LinearSolver:
             out["factor_solver_type"] = pc.getFactorSolverType()
         out["reuse_factorisation"] = self.reuse
         return out
+
+    def solve_split(self, split, b: PETSc.Vec, x: PETSc.Vec) -> Optional[bool]:
+        """Solve with the Jacobian given as bulk plus contact
+        (:class:`~dolfinx_friction.system.JacobianSplit`) by :class:`Condensed`; None when
+        that does not pay (or failed): then :meth:`solve` with the assembled Jacobian."""
+        if not (self.reuse and self._counted):
+            return None
+        if self._condensed is None:
+            self._condensed = Condensed(b.getComm(), self.ksp.getOptionsPrefix())
+        if not self._condensed.solve(split, b, x):
+            return None
+        self.condensed_solves += 1
+        return True
 
     def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> bool:
         """Solve; returns False when the solver failed (:attr:`failure` says why)."""
@@ -127,3 +154,168 @@ def _payback(F: PETSc.Mat) -> float:
     entries = F.getMumpsInfog(20)  # negative: millions
     entries = entries if entries >= 0 else -entries * 1e6
     return F.getMumpsRinfog(3) / (4.0 * max(entries, 1))
+
+
+#: The condensed path may spend at most this many factorisations' flops more than the
+#: factorisations it replaced (the columns of ``G`` are paid before they pay back).
+INVESTMENT = 4
+#: Columns of ``K^-1`` computed per back-solve call (dense right-hand sides).
+COLUMNS_PER_SOLVE = 64
+
+
+class Condensed:
+    """Solves ``(K + C) x = b`` with ``K``'s factorisation kept and ``C`` of low rank.
+
+    ``G``, the entries of ``K^-1`` among the contact surfaces' dofs, is filled column by
+    column as dofs become active and kept while ``K`` (the same matrix object) does; the
+    whole columns ``K^-1 P`` too while they take no more entries than ``K``'s factors
+    (then ``K^-1 (r - P_A w) = K^-1 r - (K^-1 P_A) w`` needs one back-solve instead of two).
+    """
+
+    def __init__(self, comm, prefix: str):
+        self.bulk = PETSc.KSP().create(comm)
+        self.bulk.setOptionsPrefix(prefix + "bulk_")
+        self.bulk.setType("preonly")
+        pc = self.bulk.getPC()
+        pc.setType("lu")
+        pc.setFactorSolverType("mumps")
+        self.bulk.setFromOptions()
+        self.outer = PETSc.KSP().create(comm)
+        self.outer.setOptionsPrefix(prefix + "condensed_")
+        self.outer.setType("richardson")
+        self.outer.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
+        self.outer.setTolerances(rtol=1e-10, atol=0.0, max_it=10)
+        pc = self.outer.getPC()
+        pc.setType("python")
+        pc.setPythonContext(self)
+        self.outer.setFromOptions()
+        self._K: Optional[PETSc.Mat] = None
+        self._regular = False  # K's factorisation succeeded
+        self._J: Optional[PETSc.Mat] = None
+        self._Z: Optional[list] = None
+        self._flops = self._solve_flops = 0.0
+        self._y: Optional[PETSc.Vec] = None
+        self._dofs = np.zeros(0, np.int64)
+        self._G = np.zeros((0, 0))
+        self._known = np.zeros(0, bool)  # per surface dof: its column of G is computed
+        self._column = np.zeros(0, np.int64)  # per surface dof: its column in _G
+        self.columns = 0  # back-solves spent on G
+        self.solves = 0  # solves done, each instead of a factorisation
+        self._spent = 0.0  # flops spent on them (estimated)
+        self.iterations = 0  # Richardson iterations
+
+    def _factorise(self, K: PETSc.Mat) -> bool:
+        """Factorise ``K``; whether MUMPS succeeded."""
+        self._K = K
+        self.bulk.setOperators(K, K)
+        self.bulk.setUp()
+        F = self.bulk.getPC().getFactorMatrix()
+        if F.getMumpsInfog(1) < 0:
+            return False
+        entries = F.getMumpsInfog(20)
+        entries = entries if entries >= 0 else -entries * 1e6
+        self._flops, self._solve_flops = F.getMumpsRinfog(3), 4.0 * entries
+        self._entries = entries  # whole columns of K^-1 are kept while they fit
+        self._J = None  # the operator K + C
+        self._dofs = np.zeros(0, np.int64)
+        self._y = K.createVecLeft()
+        return True
+
+    def _set_dofs(self, dofs: np.ndarray) -> None:
+        """The surface dofs ``G`` is kept on (all its columns are forgotten when they
+        change, or when ``K`` is factorised again)."""
+        if not np.array_equal(dofs, self._dofs):
+            self._dofs, self._G = dofs, np.zeros((len(dofs), 0))
+            self._known = np.zeros(len(dofs), bool)
+            self._column = np.zeros(len(dofs), np.int64)
+            self._Z = []
+
+    def _add_columns(self, where: np.ndarray) -> None:
+        """Columns of ``K^-1`` of the surface dofs at ``where``, restricted to the surface
+        dofs, appended to ``G``."""
+        F = self.bulk.getPC().getFactorMatrix()
+        n = self._K.getSize()[0]
+        new = []
+        for start in range(0, len(where), COLUMNS_PER_SOLVE):
+            chunk = where[start:start + COLUMNS_PER_SOLVE]
+            rhs = np.zeros((n, len(chunk)), order="F")
+            rhs[self._dofs[chunk], np.arange(len(chunk))] = 1.0
+            B = PETSc.Mat().createDense((n, len(chunk)), array=rhs, comm=PETSc.COMM_SELF)
+            X = PETSc.Mat().createDense((n, len(chunk)), comm=PETSc.COMM_SELF)
+            X.setUp()
+            F.matSolve(B, X)
+            full = X.getDenseArray()
+            new.append(full[self._dofs].copy())
+            if self._Z is not None:
+                self._Z.append(full.copy())
+            B.destroy()
+            X.destroy()
+        self._column[where] = self._G.shape[1] + np.arange(len(where))
+        self._known[where] = True
+        self._G = np.hstack([self._G] + new)
+        self.columns += len(where)
+        if self._Z is not None and n * self._G.shape[1] > self._entries:
+            self._Z = None  # no more memory for whole columns than the factors take
+
+    def solve(self, split, b: PETSc.Vec, x: PETSc.Vec) -> bool:
+        """Solve with the kept bulk factorisation; False (``x`` undefined) when this path
+        does not pay here or did not converge: the caller solves another way."""
+        if split.bulk is not self._K:
+            self._regular = self._factorise(split.bulk)
+        if not self._regular:  # e.g. a body held by the contact alone: K is singular
+            return False
+        self._set_dofs(split.dofs)
+        active = np.union1d(split.rows, split.cols)
+        where = np.searchsorted(self._dofs, active).clip(max=max(len(self._dofs) - 1, 0))
+        if len(active) and (not len(self._dofs) or (self._dofs[where] != active).any()):
+            return False  # a coupling off the surfaces: not the split assumed
+        new = where[~self._known[where]]
+        flops = (len(new) + 8) * self._solve_flops + 2.0 / 3.0 * len(active) ** 3
+        if self._spent + flops > self._flops * (self.solves + 1 + INVESTMENT):
+            return False
+        self._spent += flops
+        if len(new):
+            self._add_columns(new)
+        index = np.searchsorted(active, np.stack([split.rows, split.cols]))
+        C = np.zeros((len(active), len(active)))
+        np.add.at(C, (index[0], index[1]), split.values)
+        cols = self._column[where]
+        self._active, self._C = active, C
+        self._cols = cols
+        if self._Z is not None and len(self._Z) > 1:
+            self._Z = [np.hstack(self._Z)]
+        self._M = np.eye(len(active)) + C @ self._G[np.ix_(where, cols)]
+        if self._J is None:
+            self._J = PETSc.Mat().createPython(self._K.getSizes(), self, comm=self._K.getComm())
+            self._J.setUp()
+        self.outer.setOperators(self._J, self._J)
+        try:
+            self.outer.solve(b, x)
+        except (PETSc.Error, np.linalg.LinAlgError):  # I + C G singular: J is, or nearly
+            return False
+        self.iterations += self.outer.getIterationNumber()
+        ok = self.outer.getConvergedReason() > 0
+        self.solves += ok
+        return ok
+
+    def mult(self, mat, v: PETSc.Vec, y: PETSc.Vec) -> None:
+        """``y = (K + C) v``: the Jacobian, without assembling it."""
+        self._K.mult(v, y)
+        values = y.getArray().copy()
+        values[self._active] += self._C @ v.getArray(readonly=True)[self._active]
+        y.setArray(values)
+
+    def apply(self, pc, r: PETSc.Vec, z: PETSc.Vec) -> None:
+        """``z = (K + C)^-1 r`` (up to round-off): the preconditioner."""
+        y = self._y
+        self.bulk.solve(r, y)
+        w = np.linalg.solve(self._M, self._C @ y.getArray(readonly=True)[self._active])
+        if self._Z:  # K^-1 (r - P_A w) = y - (K^-1 P_A) w, from the kept columns
+            w_all = np.zeros(self._Z[0].shape[1])
+            w_all[self._cols] = w
+            z.setArray(y.getArray(readonly=True) - self._Z[0] @ w_all)
+            return
+        values = r.getArray(readonly=True).copy()
+        values[self._active] -= w
+        y.setArray(values)
+        self.bulk.solve(y, z)

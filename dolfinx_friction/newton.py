@@ -92,9 +92,14 @@ class Newton:
                 break
             if it == self.max_iterations:
                 break
-            A = problem.jacobian(x)
+            solver = self._solver(problem)
+            split = problem.split() if solver.reuse else None
             with problem.timers.measure("linear_solve"):
-                solved = self._solver(problem).solve(A, b, dx)
+                solved = solver.solve_split(split, b, dx) if split is not None else None
+            if solved is None:  # no split, or it did not pay: the whole Jacobian
+                A = problem.jacobian(x)
+                with problem.timers.measure("linear_solve"):
+                    solved = solver.solve(A, b, dx)
             if not solved:
                 trace.backtracks.append(0)
                 trace.reason = self.linear.failure

@@ -463,6 +463,17 @@ class NodeToSurface:
             self.couplings_version += 1
 
     # ------------------------------------------------------------- assembly
+    def surface_dofs(self) -> np.ndarray:
+        """Sorted global dofs of every node this rank's part of the contact can couple: its
+        slave nodes and its master faces' nodes (a rigid obstacle's translation excluded).
+        In serial, the couplings of every search lie within them."""
+        inter = self._interaction
+        nodes = [inter.slaves.nodes]
+        if not inter.rigid:
+            nodes.append(inter.master.nodes.ravel())
+        nodes = np.unique(np.concatenate(nodes))
+        return (nodes[:, None] * self.gdim + np.arange(self.gdim)).ravel()
+
     def _dofs(self) -> np.ndarray:
         """(n_candidates, nodes * gdim) global dofs of the candidate elements, -1 for the
         nodes of a rigid obstacle (no dofs)."""
@@ -562,6 +573,19 @@ class NodeToSurface:
         K[masked[:, :, None] | masked[:, None, :]] = 0.0
         keep = dofs >= 0
         return K[keep[:, :, None] & keep[:, None, :]]
+
+    def element_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Global ``(rows, cols, values)`` of the current elements' tangents only (what
+        :meth:`coupling_values` holds where it is not zero by construction; a rigid
+        obstacle's rows and columns left out; no bcs)."""
+        el = self._evaluated()
+        dofs = self._dofs()[el.candidate]
+        n, nd = dofs.shape
+        K = el.result.K.reshape(n, nd, nd)
+        rows = np.broadcast_to(dofs[:, :, None], K.shape)
+        cols = np.broadcast_to(dofs[:, None, :], K.shape)
+        keep = (dofs >= 0)[:, :, None] & (dofs >= 0)[:, None, :]
+        return rows[keep], cols[keep], K[keep]
 
     def register_matrix(self, A: PETSc.Mat) -> None:
         """Declare that ``A``'s pattern holds the current couplings (done by

@@ -57,6 +57,21 @@ class Timers:
             self.add(phase, time.perf_counter() - wall, time.process_time() - cpu)
 
 
+@dataclass
+class JacobianSplit:
+    """The Jacobian ``J = K + C`` (serial): ``bulk`` is ``K``, the bodies' constant
+    stiffness with the constrained rows made identity rows (a PETSc matrix, the same object
+    while it does not change); ``C``, the contact tangent (zero in constrained rows), is the
+    sum of the ``values`` at ``(rows, cols)`` (repeated pairs add), all within the contact
+    surfaces' ``dofs`` (sorted)."""
+
+    bulk: PETSc.Mat
+    dofs: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    values: np.ndarray
+
+
 PHASES = ("setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
           "output")
 
@@ -180,6 +195,8 @@ class BlockProblem:
         self._abs_data: Optional[np.ndarray] = None
         self._bulk_data: Optional[np.ndarray] = None  # bulk Jacobian values (last, or constant)
         self._bc_slots: Optional[tuple] = None
+        self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
+        self._surface_dofs: Optional[np.ndarray] = None  # of all contacts (fixed in serial)
         self._modes: Optional[PETSc.NullSpace] = None
         self.floor = 0.0
         self._spring = 0.0
@@ -364,12 +381,8 @@ class BlockProblem:
                 self._bulk_data = self._bulk_values()
             base = self._bulk_data
         with self.timers.measure("contact_assembly"):
-            data = self._pattern.from_base(base)
-            for k, c in enumerate(self.contacts):
-                data += self._pattern.gather_values(k, c.coupling_values())
             rows = self.constrained_rows
-            if self._bc_slots is None or self._bc_slots[0] is not rows:
-                self._bc_slots = (rows, self._pattern.row_slots(rows))
+            data = self._pattern.from_base(base) + self._contact_values()
             data[self._bc_slots[1]] = 0.0
             data[self._pattern.diagonal_slots[rows]] = 1.0
             # A force-controlled obstacle may have no stiffness along some axis (a
@@ -379,6 +392,49 @@ class BlockProblem:
             data[free] += self._rigid_spring(base)
             self._pattern.fill(A, data)
         return A
+
+    def _contact_values(self) -> np.ndarray:
+        """CSR data (pattern of :meth:`matrix`) of the contacts' tangents, zero in the
+        constrained rows."""
+        contact = np.zeros(self._pattern.nnz)
+        for k, c in enumerate(self.contacts):
+            contact += self._pattern.gather_values(k, c.coupling_values())
+        rows = self.constrained_rows
+        if self._bc_slots is None or self._bc_slots[0] is not rows:
+            self._bc_slots = (rows, self._pattern.row_slots(rows))
+        contact[self._bc_slots[1]] = 0.0
+        return contact
+
+    def split(self) -> Optional["JacobianSplit"]:
+        """The Jacobian at the contacts' last update as a constant bulk matrix plus a
+        contact part supported on the contact surfaces (no matrix is filled), or None where
+        that split does not hold or is not implemented: a body that is not linear, rigid
+        obstacles (their rows have no bulk stiffness), several ranks (the contact entries
+        and dofs are local indices)."""
+        if not self.linear or self.n_obstacles or self.comm.size > 1 or not self.contacts:
+            return None
+        rows = self.constrained_rows
+        with self.timers.measure("bulk_assembly"):
+            if self._bulk_bc is None or self._bulk_bc[0] is not rows:
+                if self._bulk_bc is not None:
+                    self._bulk_bc[1].destroy()
+                data = (self._bulk_values() if self._bulk_data is None
+                        else self._bulk_data.copy())
+                data[self._base.row_slots(rows)] = 0.0
+                data[self._base.diagonal_slots[rows]] = 1.0
+                K = self._base.create_matrix(self.gdim)
+                self._base.fill(K, data)
+                self._bulk_bc = (rows, K)
+        with self.timers.measure("contact_assembly"):
+            free = np.ones(self.layout.n_owned * self.gdim, bool)
+            free[rows] = False
+            entries = [c.element_entries() for c in self.contacts]
+            r, k, v = (np.concatenate(e) for e in zip(*entries))
+            keep = (v != 0.0) & free[r]
+            if self._surface_dofs is None:
+                self._surface_dofs = np.unique(np.concatenate(
+                    [c.surface_dofs() for c in self.contacts]))
+        return JacobianSplit(self._bulk_bc[1], self._surface_dofs, r[keep], k[keep], v[keep])
 
     def _rigid_spring(self, base: np.ndarray) -> float:
         """1e-12 of the largest bulk diagonal entry (found once)."""

@@ -9,7 +9,8 @@ from petsc4py import PETSc
 from dolfinx_friction.api import run
 from dolfinx_friction.assembly import CooPattern
 from dolfinx_friction.contact.shapes import face_areas
-from dolfinx_friction.model import BC, Body, ContactPair, Rigid, RigidMotion, Scene, Step
+from dolfinx_friction.model import (BC, Body, ContactPair, Load, Rigid, RigidMotion, Scene,
+                                    Step)
 from dolfinx_friction.problem import ContactProblem
 from dolfinx_friction.solver import Solver
 from dolfinx_friction.surfaces import SlaveNodes, master_faces
@@ -136,6 +137,79 @@ def test_iterative_solver_gives_the_direct_answer(shared_dir):
                                        atol=1e-9 * R)
         assert ([i.iterations for i in gamg.increments]
                 == [i.iterations for i in direct.increments])
+
+
+def _solve(scene, comm=MPI.COMM_WORLD, **kwargs):
+    """(reactions per increment, the Solver) of a run."""
+    solver = Solver(ContactProblem(scene, comm), **kwargs)
+    increments = []
+    solver.run(increments.append)
+    return increments, solver
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.3])
+def test_condensed_solve_gives_the_direct_answer(shared_dir, mu):
+    """Linear bodies, serial: the bulk factorisation kept for the run with the contact
+    condensed (linear.Condensed) reaches the reactions of a factorisation per iteration to
+    round-off, in the same Newton iterations; under MPI the run takes the other path.
+    A deep foundation: the contact surface is small against the bulk, where it pays."""
+    mesh = meshes.two_boxes(shared_dir / "deep_boxes.msh", n_foundation=(5, 5, 10))
+    scene = _boxes_scene(mesh, mu=mu)
+    condensed, solver = _solve(scene)
+    direct, plain = _solve(scene, reuse_factorisation=False)
+    assert plain.linear.condensed_solves == 0
+    if solver.comm.size == 1:
+        assert solver.linear.condensed_solves > 0
+        assert solver.linear.factorisations == 0  # only the bulk's, once
+    else:
+        assert solver.linear.condensed_solves == 0
+    for a, b in zip(condensed, direct):
+        for group in b.reactions:
+            R = np.abs(b.reactions[group]).max()  # measured: 1e-14 R
+            np.testing.assert_allclose(a.reactions[group], b.reactions[group], atol=1e-10 * R)
+    assert [i.iterations for i in condensed] == [i.iterations for i in direct]
+
+
+def test_condensed_solve_falls_back_when_the_bulk_is_singular(shared_dir):
+    """A block held by the contact alone (pressure on its top): its bulk stiffness is
+    singular, the condensed path does not converge and the factorisation path answers,
+    with the reactions and iterations of factorising every Jacobian."""
+    mesh = meshes.two_boxes(shared_dir / "deep_boxes.msh", n_foundation=(5, 5, 10))
+    scene = Scene(
+        mesh=mesh, bodies=(Body("block", 1000.0, 0.3), Body("foundation", 2000.0, 0.25)),
+        contacts=(ContactPair("block_bottom", "foundation_top", mu=0.3),),
+        steps=(Step("press", increments=2, bcs=(BC("foundation_bottom", (0.0, 0.0, 0.0)),),
+                    loads=(Load("block_top", pressure=10.0),)),))
+    condensed, solver = _solve(scene)
+    direct, _ = _solve(scene, reuse_factorisation=False)
+    assert solver.linear.condensed_solves == 0
+    for a, b in zip(condensed, direct):
+        R = np.abs(b.reactions["foundation_bottom"]).max()  # measured: 1e-15 R
+        np.testing.assert_allclose(a.reactions["foundation_bottom"],
+                                   b.reactions["foundation_bottom"], atol=1e-10 * R)
+    assert [i.iterations for i in condensed] == [i.iterations for i in direct]
+
+
+def test_jacobian_splits_into_bulk_and_contact(shared_dir):
+    """``split()``: the last Jacobian is exactly the bulk matrix (constrained rows made
+    identity) plus the contact entries, all within the contact surfaces' dofs."""
+    mesh = meshes.two_boxes(shared_dir / "boxes.msh")
+    _, solver = _solve(_boxes_scene(mesh, mu=0.3), MPI.COMM_SELF)
+    system = solver.system
+    J = system.jacobian(system.x)
+    split = system.split()
+    assert split is not None and len(split.values) > 0
+    assert np.isin(split.rows, split.dofs).all() and np.isin(split.cols, split.dofs).all()
+    D = J.copy()
+    D.axpy(-1.0, split.bulk, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+    C = PETSc.Mat().createAIJ(J.getSize(), comm=MPI.COMM_SELF)
+    C.setUp()
+    C.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+    for r, c, v in zip(split.rows, split.cols, split.values):
+        C.setValue(r, c, v, addv=PETSc.InsertMode.ADD)
+    C.assemble()
+    D.axpy(-1.0, C, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    assert D.norm(PETSc.NormType.INFINITY) <= 1e-15 * J.norm(PETSc.NormType.INFINITY)
 
 
 def test_slave_areas_sum_to_the_surface_area(shared_dir):
