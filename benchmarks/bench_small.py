@@ -22,6 +22,9 @@ Each is written as a scene file (TOML + mesh) and as a CalculiX deck
 * ``ours``: ``python -m dolfinx_friction run scene.toml --quiet`` (all outputs: fields
   per increment, contact table, history, summary);
 * ``ours, no fields``: the same with ``--set output.fields=false``;
+* ``ours, cold mesh cache``: ``ours`` with an empty mesh cache (:mod:`dolfinx_friction.mesh_cache`:
+  gmsh reads the mesh); the other runs of ours find the mesh in a cache of their own
+  (``$BENCH_WORK/small/mesh_cache``), as every run after a scene's first does;
 * ``ccx``: ``ccx -i deck`` (one thread, as ``calculix.run_ccx`` runs it);
 * the floors: ``python -c pass`` and ``python -c "import dolfinx_friction.api"``.
 
@@ -113,13 +116,16 @@ def measure(name: str, repeats: int) -> dict:
     from dolfinx_friction import calculix
     toml = prepare(name)
     d, py = toml.parent, B.PYTHON
-    env = dict(os.environ, PYTHONPATH=str(B.ROOT), OMP_NUM_THREADS="1")
+    cold_cache = B.work_dir("small") / "mesh_cache_cold"
+    env = dict(os.environ, PYTHONPATH=str(B.ROOT), OMP_NUM_THREADS="1",
+               DOLFINX_FRICTION_CACHE=str(B.work_dir("small") / "mesh_cache"))
     ccx_env = dict(env, CCX_NPROC_STIFFNESS="1", CCX_NPROC_EQUATION_SOLVER="1",
                    CCX_NPROC_RESULTS="1")
     run = [py, "-m", "dolfinx_friction", "run", toml.name, "--quiet", "--out", "out"]
     commands = {
         "ours": (run, env),
         "ours, no fields": (run + ["--set", "output.fields=false"], env),
+        "ours, cold mesh cache": (run, dict(env, DOLFINX_FRICTION_CACHE=str(cold_cache))),
         "ccx": ([calculix.ccx_executable(), "-i", name], ccx_env),
         "python -c pass": ([py, "-c", "pass"], env),
         "import dolfinx_friction.api": ([py, "-c", "import dolfinx_friction.api"], env),
@@ -129,6 +135,7 @@ def measure(name: str, repeats: int) -> dict:
     for _ in range(repeats):
         for key, (cmd, e) in commands.items():
             shutil.rmtree(d / "out", ignore_errors=True)
+            shutil.rmtree(cold_cache, ignore_errors=True)
             times[key].append(timed(cmd, d, e))
     timed(run, d, env)  # once more with all outputs, for its summary
     summary = json.loads((d / "out" / "summary.json").read_text())
