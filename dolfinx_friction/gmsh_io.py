@@ -15,6 +15,7 @@ every rank raises the same :class:`MeshError`.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import mmap
 import os
 import re
@@ -537,7 +538,7 @@ def _read_file(path: Path, body_names: Sequence[str]) -> _Plan:
     """The plan of a mesh file: from :mod:`mesh_cache` if it was read before, else with
     gmsh (and then cached)."""
     with _checked_file(path) as fd:
-        name = mesh_cache.key(fd, body_names)
+        name = mesh_cache.key(fd, body_names, _reader_identity())
         entry = mesh_cache.load(name) if name else None
         if entry is not None:
             return _plan_from_record(*entry)
@@ -546,6 +547,11 @@ def _read_file(path: Path, body_names: Sequence[str]) -> _Plan:
     if name:
         mesh_cache.store(name, *_plan_record(plan))
     return plan
+
+
+def _reader_identity() -> str:
+    """The SHA-256 of this module's source: cached plans are what its reader made."""
+    return hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
 
 
 def _plan_record(plan: _Plan) -> tuple[dict, dict[str, np.ndarray]]:

@@ -6,8 +6,10 @@ reading a small mesh and, on a scene of 1k dofs, a tenth of the whole run
 this cache: a ``.npz`` file (no pickle) of named arrays and a JSON header.
 
 * Key: the SHA-256 of the file's bytes (as read through the open descriptor that
-  would be given to gmsh), the body names, the package version and :data:`FORMAT`;
-  a changed file, other bodies or another version is a miss.
+  would be given to gmsh), the body names, the reader's own identity (the caller passes
+  the hash of its source: a changed reader never sees entries of the old one), the
+  package version and :data:`FORMAT`; a changed file, other bodies or another reader is
+  a miss.
 * Where: ``$DOLFINX_FRICTION_CACHE``, else ``$XDG_CACHE_HOME/dolfinx_friction``, else
   ``~/.cache/dolfinx_friction``; the entries are in its ``meshes`` folder.
   ``DOLFINX_FRICTION_CACHE=off`` switches the cache off.
@@ -50,9 +52,10 @@ def directory() -> Optional[Path]:
     return Path(root) / "meshes"
 
 
-def key(fd: int, body_names: Sequence[str]) -> Optional[str]:
-    """The entry name of the open mesh file ``fd`` read for ``body_names``; None when the
-    cache is off or the file is too large to be cached."""
+def key(fd: int, body_names: Sequence[str], reader: str) -> Optional[str]:
+    """The entry name of the open mesh file ``fd`` read for ``body_names`` by ``reader``
+    (a string that changes when the reader does); None when the cache is off or the file
+    is too large to be cached."""
     if directory() is None or os.fstat(fd).st_size > MAX_FILE_BYTES:
         return None
     digest = hashlib.sha256()
@@ -60,7 +63,7 @@ def key(fd: int, body_names: Sequence[str]) -> Optional[str]:
     while block := os.pread(fd, 1 << 20, offset):
         digest.update(block)
         offset += len(block)
-    digest.update(json.dumps([FORMAT, __version__, list(body_names)]).encode())
+    digest.update(json.dumps([FORMAT, __version__, reader, list(body_names)]).encode())
     return digest.hexdigest()
 
 
