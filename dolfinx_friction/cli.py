@@ -101,15 +101,29 @@ def _run(args, scene) -> None:
               f"{s.cutbacks} cutbacks, {s.wall:.2f} s; results in {result.directory}")
 
 
+#: what MPI launchers (Open MPI, PMIx, MPICH, MVAPICH) set in each rank's environment
+_RANK_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK", "MV2_COMM_WORLD_RANK")
+
+
 def _rank() -> int:
     """This process's MPI rank, without initialising MPI just to print an error."""
     mpi = sys.modules.get("mpi4py.MPI")
     if mpi is not None and mpi.Is_initialized() and not mpi.Is_finalized():
         return mpi.COMM_WORLD.rank
-    for name in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK", "MV2_COMM_WORLD_RANK"):
+    for name in _RANK_VARIABLES:
         if os.environ.get(name, "").isdigit():
             return int(os.environ[name])
     return 0
+
+
+def _no_singleton_daemon() -> None:
+    """A run started without a launcher is an MPI singleton, for which Open MPI 4 starts a
+    daemon (orted) that only spawning processes needs (the package never spawns): ~0.3 s of
+    wall time at start-up (``benchmarks/bench_small.py``).  Ask for none, before mpi4py is
+    imported; under a launcher (its rank variables set) nothing changes.  Open MPI 5 does
+    not know the variable and ignores it, as it ignores every unknown ``OMPI_MCA_``."""
+    if not any(name in os.environ for name in _RANK_VARIABLES):
+        os.environ.setdefault("OMPI_MCA_ess_singleton_isolated", "1")
 
 
 def _quiet_libraries(debug: bool) -> None:
@@ -203,6 +217,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.command in commands.COMMANDS:
         return commands.main(args)
     _show_notices(getattr(args, "quiet", False))
+    _no_singleton_daemon()
     _install_signal_handlers()
     try:
         reason = file_fault(args.scene)

@@ -52,19 +52,34 @@ def _gmshio():
     return mod
 
 
+# Gmsh element type -> (cell, degree) of the body cells that gmsh_io accepts
+_GMSH_CELLS = {2: ("triangle", 1), 9: ("triangle", 2), 3: ("quadrilateral", 1),
+               10: ("quadrilateral", 2), 4: ("tetrahedron", 1), 11: ("tetrahedron", 2),
+               5: ("hexahedron", 1), 12: ("hexahedron", 2)}
+
+
 def ufl_mesh(gmsh_cell: int, gdim: int):
-    """The ufl coordinate domain (equispaced Lagrange) for a Gmsh element type number."""
+    """The ufl coordinate domain (equispaced Lagrange) for a Gmsh element type number.
+
+    0.5: built here as ``gmshio.ufl_mesh`` builds it (that module imports gmsh, ~0.5 s,
+    and its table of cells exists only when gmsh imports); 0.9: ``gmshio.ufl_mesh``.
+    """
     if NEW_API:
         # 0.9: ufl_mesh(gmsh_cell, gdim, dtype) builds a basix.ufl element.
         return _gmshio().ufl_mesh(gmsh_cell, gdim, dtype=dolfinx.default_real_type)
-    return _gmshio().ufl_mesh(gmsh_cell, gdim)
+    import ufl
+    shape, degree = _GMSH_CELLS[gmsh_cell]
+    cell = ufl.Cell(shape, geometric_dimension=gdim)
+    return ufl.Mesh(ufl.VectorElement(ufl.FiniteElement("Lagrange", cell, degree,
+                                                        variant="equispaced")))
 
 
 def cell_perm_gmsh(cell_type: dolfinx.mesh.CellType, num_nodes: int) -> np.ndarray:
     """Permutation ``p`` with ``nodes_dolfinx[i] = nodes_gmsh[p[i]]`` (``cpp.io.perm_gmsh``)."""
-    # Same call in 0.5 and 0.9 (gmshio.cell_perm_array); kept here because the
-    # module moved to dolfinx.io.gmsh in 0.10.
-    return np.asarray(_gmshio().cell_perm_array(cell_type, num_nodes), dtype=np.int64)
+    if NEW_API:  # gmshio.cell_perm_array; the module moved to dolfinx.io.gmsh in 0.10
+        return np.asarray(_gmshio().cell_perm_array(cell_type, num_nodes), dtype=np.int64)
+    import dolfinx.cpp.io  # 0.5: what gmshio.cell_perm_array calls, without importing gmsh
+    return np.asarray(dolfinx.cpp.io.perm_gmsh(cell_type, num_nodes), dtype=np.int64)
 
 
 def create_mesh(comm, cells: np.ndarray, x: np.ndarray, domain) -> dolfinx.mesh.Mesh:
@@ -262,8 +277,10 @@ def bc_on_space(bc, V) -> bool:
 
 
 def cell_function(expr, mesh, shape: tuple, name: str):
-    """A DG0 Function (cell values, as XDMF cell data) of a UFL expression evaluated at
-    the cell midpoints; ``shape`` is the value shape (``()`` for a scalar)."""
+    """A DG0 Function (cell values, as XDMF cell data) named ``name`` and the compiled
+    expression that fills it: ``expr`` (a UFL expression of value shape ``shape``, ``()``
+    for a scalar) at the cell midpoints.  ``f.interpolate(expression)`` refreshes ``f``
+    from the current values of the coefficients of ``expr``."""
     import basix
     import dolfinx.fem
     cell = getattr(basix.CellType, mesh.topology.cell_type.name)
@@ -277,9 +294,8 @@ def cell_function(expr, mesh, shape: tuple, name: str):
     else:
         V = dolfinx.fem.TensorFunctionSpace(mesh, ("DG", 0), shape=shape)
     f = dolfinx.fem.Function(V)
-    f.interpolate(dolfinx.fem.Expression(expr, midpoint))
     f.name = name
-    return f
+    return f, dolfinx.fem.Expression(expr, midpoint)
 
 
 def quadrature_expression(expr, mesh, degree: int):

@@ -15,6 +15,7 @@ every rank raises the same :class:`MeshError`.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import mmap
 import os
 import re
@@ -31,7 +32,7 @@ from mpi4py import MPI
 import dolfinx
 import dolfinx.mesh
 
-from . import compat
+from . import compat, mesh_cache
 from .inputs import file_fault
 
 __all__ = ["MeshError", "BodyMesh", "MeshSet", "load_mesh"]
@@ -447,13 +448,8 @@ def check_msh(path: Path, fd: int) -> None:
 
 
 @contextlib.contextmanager
-def _private_link(path: Path):
-    """``path`` opened and checked as MSH, seen through a link in a private directory.
-
-    gmsh merges ``<file>.opt`` (a script) when it finds one next to a mesh, and it
-    chooses its reader from the name: the link is named ``mesh.msh`` in a fresh
-    directory, and points at the very file that was checked (``/proc/self/fd``).
-    """
+def _checked_file(path: Path):
+    """The descriptor of ``path``, opened and checked as MSH, for the ``with`` block."""
     where = f"mesh file '{path}'"
     fault = file_fault(path)
     if fault == "no such file":
@@ -468,12 +464,23 @@ def _private_link(path: Path):
         if not stat.S_ISREG(os.fstat(fd).st_mode):
             raise MeshError(f"{where}: is not a regular file")
         check_msh(path, fd)
-        with tempfile.TemporaryDirectory(prefix="dolfinx_friction_mesh_") as tmp:
-            link = Path(tmp) / "mesh.msh"
-            os.symlink(f"/proc/self/fd/{fd}", link)
-            yield link
+        yield fd
     finally:
         os.close(fd)
+
+
+@contextlib.contextmanager
+def _private_link(fd: int):
+    """The checked file ``fd`` seen through a link in a private directory.
+
+    gmsh merges ``<file>.opt`` (a script) when it finds one next to a mesh, and it
+    chooses its reader from the name: the link is named ``mesh.msh`` in a fresh
+    directory, and points at the very file that was checked (``/proc/self/fd``).
+    """
+    with tempfile.TemporaryDirectory(prefix="dolfinx_friction_mesh_") as tmp:
+        link = Path(tmp) / "mesh.msh"
+        os.symlink(f"/proc/self/fd/{fd}", link)
+        yield link
 
 
 @contextlib.contextmanager
@@ -485,10 +492,17 @@ def gmsh_file(path: Path):
     missing, not a regular file, not Gmsh MSH 2.2 or 4.1 or cannot be read: gmsh
     never sees a file that it would run as a script.
     """
+    with _checked_file(path) as fd, _merged(path, fd) as gmsh:
+        yield gmsh
+
+
+@contextlib.contextmanager
+def _merged(path: Path, fd: int):
+    """gmsh with the checked file ``fd`` (opened from ``path``) merged into a fresh model."""
     import gmsh
 
     where = f"mesh file '{path}'"
-    with _private_link(path) as link:
+    with _private_link(fd) as link:
         own = not _gmsh_initialized(gmsh)
         if own:
             gmsh.initialize()
@@ -521,8 +535,54 @@ def gmsh_file(path: Path):
 
 
 def _read_file(path: Path, body_names: Sequence[str]) -> _Plan:
-    with gmsh_file(path) as gmsh:
-        return _extract(gmsh, body_names, f"mesh file '{path}'")
+    """The plan of a mesh file: from :mod:`mesh_cache` if it was read before, else with
+    gmsh (and then cached)."""
+    with _checked_file(path) as fd:
+        name = mesh_cache.key(fd, body_names, _reader_identity())
+        entry = mesh_cache.load(name) if name else None
+        if entry is not None:
+            return _plan_from_record(*entry)
+        with _merged(path, fd) as gmsh:
+            plan = _extract(gmsh, body_names, f"mesh file '{path}'")
+    if name:
+        mesh_cache.store(name, *_plan_record(plan))
+    return plan
+
+
+def _reader_identity() -> str:
+    """The SHA-256 of this module's source: cached plans are what its reader made."""
+    return hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
+
+
+def _plan_record(plan: _Plan) -> tuple[dict, dict[str, np.ndarray]]:
+    """A plan as a JSON-able header and named arrays (:mod:`mesh_cache`)."""
+    arrays = {}
+    bodies = []
+    for i, b in enumerate(plan.bodies):
+        arrays[f"b{i}_cells"], arrays[f"b{i}_x"] = b.cells, b.x
+        for j, g in enumerate(b.groups):
+            arrays[f"b{i}_g{j}"] = g.entities
+        bodies.append({"name": b.name, "gmsh_type": int(b.gmsh_type),
+                       "num_cells": int(b.num_cells),
+                       "groups": [[g.name, int(g.dim), int(g.gmsh_type), int(g.count)]
+                                  for g in b.groups]})
+    header = {"gdim": int(plan.gdim), "bodies": bodies,
+              "group_dims": {k: int(v) for k, v in plan.group_dims.items()},
+              "group_bodies": plan.group_bodies, "group_touches": plan.group_touches}
+    return header, arrays
+
+
+def _plan_from_record(header: dict, arrays: dict[str, np.ndarray]) -> _Plan:
+    """The inverse of :func:`_plan_record`."""
+    bodies = []
+    for i, b in enumerate(header["bodies"]):
+        groups = [_GroupPlan(name, dim, gtype, count, arrays[f"b{i}_g{j}"])
+                  for j, (name, dim, gtype, count) in enumerate(b["groups"])]
+        bodies.append(_BodyPlan(b["name"], b["gmsh_type"], b["num_cells"], arrays[f"b{i}_cells"],
+                                arrays[f"b{i}_x"], groups))
+    return _Plan(header["gdim"], bodies, dict(header["group_dims"]),
+                 {k: tuple(v) for k, v in header["group_bodies"].items()},
+                 {k: tuple(v) for k, v in header["group_touches"].items()})
 
 
 def _read_live(gmsh, body_names: Sequence[str]) -> _Plan:

@@ -331,6 +331,8 @@ class FieldWriter:
         self._size = 0  # bytes of the last increment's field folder and time series
         self._series: dict[str, list[str]] = {f.body.name: [] for f in problem.fields}
         self.outputs = [compat.output_spaces(f) for f in problem.fields]
+        # compiled once: a form compiler cache hit still costs ~10 ms per expression
+        self.stresses = [self._stresses(f) for f in problem.fields]
 
     def _contact_fields(self, field) -> dict[str, np.ndarray]:
         """Nodal contact values of a body's slave nodes (owned nodes; 0 elsewhere)."""
@@ -350,7 +352,8 @@ class FieldWriter:
         return out
 
     def _stresses(self, field) -> list:
-        """Cell functions: the Cauchy stress (gdim x gdim) and its von Mises stress."""
+        """Cell functions and the expressions that fill them: the Cauchy stress
+        (gdim x gdim) and its von Mises stress."""
         from dolfinx_friction.problem import cauchy_stress, von_mises
         sigma, d, mesh = cauchy_stress(field), field.gdim, field.V.mesh
         in_plane = ufl.as_matrix([[sigma[i, j] for j in range(d)] for i in range(d)])
@@ -371,11 +374,13 @@ class FieldWriter:
                 error = _fault(self.dir / name, exc)
         _collective(comm, error)
         self.problem.system.scatter()
-        for field, spaces in zip(self.problem.fields, self.outputs):
+        for field, spaces, stresses in zip(self.problem.fields, self.outputs, self.stresses):
             path = scratch / f"{field.body.name}.xdmf"
+            for f, expression in stresses:
+                f.interpolate(expression)
             try:  # HDF5 writes collectively: every rank sees the failure
                 compat.write_fields(path, field, spaces, self._contact_fields(field), inc.t,
-                                    self._stresses(field))
+                                    [f for f, _ in stresses])
             except (RuntimeError, OSError) as exc:
                 error = _fault(self.dir / name / path.name, exc)
             if comm.allreduce(error is not None):  # (any rank: the others must stop too)

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
 
 HEADER = '<?xml version="1.0"?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n<Xdmf Version="3.0">\n'
 INDENT = "  "
@@ -53,6 +52,9 @@ def increment_grid(xdmf: Path, t: float) -> str:
 def collection(name: str, grids: list[str]) -> str:
     """The XDMF document of a temporal collection ``name`` of ``grids`` (from
     :func:`increment_grid`), in time order."""
-    return (f"{HEADER}{INDENT}<Domain>\n{INDENT * 2}<Grid Name={quoteattr(name)} "
-            f'GridType="Collection" CollectionType="Temporal">\n{"".join(grids)}'
+    # (ElementTree quotes the name; xml.sax.saxutils would import urllib: ~40 ms)
+    grid = ET.tostring(ET.Element("Grid", Name=name, GridType="Collection",
+                                  CollectionType="Temporal"), encoding="unicode")
+    return (f"{HEADER}{INDENT}<Domain>\n{INDENT * 2}{grid.removesuffix(' />')}>\n"
+            f'{"".join(grids)}'
             f"{INDENT * 2}</Grid>\n{INDENT}</Domain>\n</Xdmf>\n")

@@ -637,3 +637,81 @@ def test_2d_not_planar(shared_dir):
 
     on_root(make)
     expect_error(path, ["sheet"], r"tilted\.msh.*z coordinates are not constant")
+
+
+# --------------------------------------------------------------------------
+# mesh cache: a file read once is read again without gmsh
+# --------------------------------------------------------------------------
+def mesh_digest(ms: MeshSet) -> dict:
+    """Global sums of coordinates and group sizes of every body (equal for equal meshes)."""
+    out = {}
+    for name, body in ms.bodies.items():
+        imap = body.mesh.topology.index_map(0)
+        x = body.mesh.geometry.x[: imap.size_local]
+        out[name] = (comm.allreduce(float(np.sum(x * np.arange(1, 4))), op=MPI.SUM),
+                     {g: comm.allreduce(len(idx), op=MPI.SUM)
+                      for g, (_, idx) in body.groups.items()})
+    return out
+
+
+_READ_TWICE = """
+import json, sys
+from dolfinx_friction.gmsh_io import load_mesh
+ms = load_mesh(sys.argv[1], ["lower", "upper"])
+print(json.dumps({"gmsh": "gmsh" in sys.modules, "groups": ms.group_bodies,
+                  "x": {n: b.mesh.geometry.x.tolist() for n, b in ms.bodies.items()},
+                  "cells": {n: b.groups[n][1].size for n, b in ms.bodies.items()}}))
+"""
+
+
+@pytest.mark.skipif(comm.size > 1, reason="runs its own serial processes")
+def test_cache_second_read_without_gmsh(boxes_file, tmp_path):
+    import json
+    import subprocess
+    import sys
+    env = dict(os.environ, DOLFINX_FRICTION_CACHE=str(tmp_path),
+               PYTHONPATH=os.pathsep.join([str(Path(__file__).resolve().parents[2]),
+                                           os.environ.get("PYTHONPATH", "")]))
+    runs = [json.loads(subprocess.run([sys.executable, "-c", _READ_TWICE, str(boxes_file)],
+                                      env=env, capture_output=True, text=True, check=True)
+                       .stdout) for _ in range(2)]
+    assert runs[0]["gmsh"]
+    if not compat.NEW_API:  # 0.9 builds the coordinate element with gmshio, which imports gmsh
+        assert not runs[1]["gmsh"]
+    assert runs[0]["x"] == runs[1]["x"] and runs[0]["groups"] == runs[1]["groups"]
+    assert runs[0]["cells"] == runs[1]["cells"]
+    assert len(list((tmp_path / "meshes").glob("*.npz"))) == 1
+
+
+def test_cache_damaged_entry_or_changed_file(shared_dir, monkeypatch):
+    cache = Path(comm.bcast(tempfile.mkdtemp(prefix="mesh_cache_") if ROOT else None, root=0))
+    monkeypatch.setenv("DOLFINX_FRICTION_CACHE", str(cache))
+    path = shared_dir / "boxes.msh"
+
+    def make():
+        with gmsh_session():
+            build_boxes("hex", 1)
+            write(path)
+
+    on_root(make)
+    reference = mesh_digest(load_mesh(str(path), ["lower", "upper"], comm))
+    entries = sorted((cache / "meshes").glob("*.npz")) if ROOT else []
+    if ROOT:
+        assert len(entries) == 1
+        entries[0].write_bytes(b"not an npz")  # damaged: read with gmsh again, rewritten
+    comm.barrier()
+    assert mesh_digest(load_mesh(str(path), ["lower", "upper"], comm)) == reference
+    assert mesh_digest(load_mesh(str(path), ["lower", "upper"], comm)) == reference
+    if ROOT:
+        assert entries[0].read_bytes()[:2] == b"PK"
+        assert load_mesh(str(path), ["upper"], MPI.COMM_SELF).bodies.keys() == {"upper"}
+        assert len(list((cache / "meshes").glob("*.npz"))) == 2  # other bodies: own entry
+        with gmsh_session():  # another mesh in the same file name: a miss
+            build_boxes("tet", 1)
+            write(path)
+    comm.barrier()
+    tets = load_mesh(str(path), ["lower", "upper"], comm)
+    assert num_cells(tets.bodies["upper"]) > (N - 1) ** 3
+    comm.barrier()
+    if ROOT:
+        shutil.rmtree(cache, ignore_errors=True)
