@@ -139,7 +139,7 @@ def test_singular_jacobian_fails_with_its_reason(mesh_dir):
     out = mesh_dir / "pulled_off"
     scene = _scene(mesh_dir, "pulled_off", [("step.1", pull)], base=RIGID)
     with pytest.raises(ConvergenceError, match="singular Jacobian") as info:
-        run(scene, out=out, quiet=True)
+        run(scene, out=out)
     assert "\n" not in str(info.value)
     if COMM.rank == 0:
         rows = _rows(out / "history.csv")
