@@ -157,7 +157,7 @@ def modulus(value: Any, key: str) -> float:
     """Young's modulus: > 0, and small enough that the penalty 50 E is a finite number."""
     E = number(gt=0)(value, key)
     if not math.isfinite(50.0 * E):
-        fail(key, "is so large that the penalty K = 50 E (CalculiX's default) overflows", value)
+        fail(key, "is so large that CalculiX's penalty rule K = 50 E overflows", value)
     return E
 
 
