@@ -12,7 +12,7 @@ from dolfinx_friction import viz  # noqa: I001  (pyvista before dolfinx)
 from dolfinx_friction.api import run
 
 scene, out = Path(sys.argv[1]), Path(sys.argv[2])
-result = run(scene, out=out, quiet=True)
+result = run(scene, out=out)
 png = viz.render(result, out / "release_check.png")
 if png is None or not Path(png).is_file() or Path(png).stat().st_size == 0:
     print(f"render.py: no picture written ({png})", file=sys.stderr)
