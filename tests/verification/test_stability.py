@@ -204,7 +204,7 @@ def test_pairing_freeze_stops_face_chattering(shared_dir):
     default = run(_groove_scene(mesh, 8), write=False)  # CalculiX: freeze after 8
     assert default.increments[-1].iterations >= 9  # chattered until the freeze
     with pytest.raises(ConvergenceError):
-        run(_groove_scene(mesh, 10 ** 6, max_cutbacks=1, max_iterations=15), write=False)
+        run(_groove_scene(mesh, 10_000, max_cutbacks=1, max_iterations=15), write=False)
 
 
 def test_too_soft_penalty_warns(shared_dir, caplog):
