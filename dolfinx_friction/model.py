@@ -31,6 +31,8 @@ LAWS = ("linear", "exponential", "tabular", "hard")
 MODELS = ("linear", "saint-venant-kirchhoff", "neo-hookean")
 SHAPES = ("plane", "sphere", "cylinder")
 TANGENTS = ("consistent", "calculix")
+#: Newton's convergence tests (:mod:`dolfinx_friction.newton`)
+CONVERGENCE = ("residual", "reactions")
 
 #: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
 #: h: its node spacing, see :meth:`ContactPair.resolved`), from the stability maps
@@ -186,6 +188,8 @@ class Step:
     newton_atol: float = 1e-10
     max_iterations: int = 30
     line_search: bool = True
+    convergence: str = "residual"  # or "reactions": also stop once they no longer change
+    reaction_tol: float = 1e-5
     bcs: tuple[BC, ...] = ()
     loads: tuple[Load, ...] = ()
     rigid: tuple[RigidMotion, ...] = ()
@@ -293,6 +297,8 @@ RULES: dict[type, Rules] = {
         "newton_atol": Key(v.number(gt=0)),
         "max_iterations": Key(v.integer(1, 10_000)),
         "line_search": Key(v.boolean),
+        "convergence": Key(v.one_of(*CONVERGENCE)),
+        "reaction_tol": Key(v.number(gt=0, lt=1)),
         "bc": Key(v.items(BC), field="bcs"),
         "load": Key(v.items(Load), field="loads"),
         "rigid": Key(v.items(RigidMotion)),

@@ -3,9 +3,11 @@ PETSc SNES instead.
 
 Each iteration pairs the contacts at the accepted iterate (in their first
 ``pairing_iterations`` iterations), evaluates the residual and, unless converged,
-solves with the Jacobian.  Converged: the residual norm is below ``max(rtol r_0, atol)``
-or below its round-off floor.  The line search halves the step (at most 5 times, the
-pairing frozen) while the residual norm does not decrease.
+solves with the Jacobian.  Converged (``convergence="residual"``, the default): the
+residual norm is below ``max(rtol r_0, atol)`` or below its round-off floor.
+``convergence="reactions"`` also stops when the reactions and the displacements no
+longer change (:func:`settled`).  The line search halves the step (at most 5 times,
+the pairing frozen) while the residual norm does not decrease.
 """
 from __future__ import annotations
 
@@ -13,9 +15,11 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction.linear import LinearSolver
+from dolfinx_friction.model import CONVERGENCE
 from dolfinx_friction.system import BlockProblem
 
 
@@ -29,6 +33,8 @@ class NewtonTrace:
 
     converged: bool = False
     residuals: list[float] = field(default_factory=list)
+    corrections: list[float] = field(default_factory=list)  # max |dx| of iteration k + 1
+    reaction_changes: list[float] = field(default_factory=list)  # max |R_k+1 - R_k|
     status_changes: list[int] = field(default_factory=list)
     face_changes: list[int] = field(default_factory=list)
     backtracks: list[int] = field(default_factory=list)
@@ -44,13 +50,20 @@ class Newton:
 
     ``prefix`` and ``petsc_options`` set the linear solver (default MUMPS, with the
     factorisation kept as GMRES preconditioner where only contact changes the Jacobian:
-    see :mod:`dolfinx_friction.linear`).
+    see :mod:`dolfinx_friction.linear`).  ``convergence``: ``"residual"`` (the residual
+    norm test alone) or ``"reactions"`` (that test, or the reactions and displacements
+    settled to ``reaction_tol``: :func:`settled`).
     """
 
     def __init__(self, rtol: float = 1e-9, atol: float = 1e-10, max_iterations: int = 30,
                  line_search: bool = True, prefix: str = "dolfinx_friction_",
                  petsc_options: Optional[dict] = None,
-                 reuse_factorisation: Optional[bool] = None):
+                 reuse_factorisation: Optional[bool] = None,
+                 convergence: str = "residual", reaction_tol: float = 1e-5):
+        if convergence not in CONVERGENCE:
+            raise ValueError(f"convergence = {convergence!r}: must be one of "
+                             f"{', '.join(map(repr, CONVERGENCE))}")
+        self.convergence, self.reaction_tol = convergence, reaction_tol
         self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
         self.line_search = line_search
         self.prefix, self.petsc_options = prefix, petsc_options
@@ -72,11 +85,15 @@ class Newton:
                 c.update(problem.x, pairing=pairing)
         return problem.residual(problem.x, problem.b)
 
-    def solve(self, problem: BlockProblem) -> NewtonTrace:
+    def solve(self, problem: BlockProblem, start: Optional[PETSc.Vec] = None) -> NewtonTrace:
+        """Iterate from :attr:`BlockProblem.x` to convergence; ``start``: the converged
+        state the increment starts from (default: ``x`` on entry), the scale of the
+        displacement test of ``convergence="reactions"``."""
         x, b = problem.x, problem.b
         dx = x.duplicate()
+        x_n = x.copy() if start is None else start
         trace = NewtonTrace()
-        before = None
+        before, reactions, floor = None, None, 0.0
         for it in range(self.max_iterations + 1):
             norm = self._evaluate(problem, True)  # pairing at the accepted iterate
             trace.residuals.append(norm)
@@ -86,8 +103,12 @@ class Newton:
             before = now
             if not np.isfinite(norm):
                 break
+            reactions = self._reactions(problem, reactions, trace)
             target = max(self.rtol * trace.residuals[0], self.atol)
-            if norm <= max(target, problem.floor):
+            floor = _floor_if_near(problem, norm, target, floor, it == 0)
+            if norm <= max(target, floor) or (
+                    self.convergence == "reactions"
+                    and settled(trace, problem, x, x_n, reactions, self.reaction_tol)):
                 trace.converged = True
                 break
             if it == self.max_iterations:
@@ -105,25 +126,88 @@ class Newton:
                 trace.reason = self.linear.failure
                 break
             x.axpy(-1.0, dx)
-            trace.backtracks.append(self._line_search(problem, dx, norm, target)
+            trace.corrections.append(dx.norm(PETSc.NormType.NORM_INFINITY))
+            trace.backtracks.append(self._line_search(problem, dx, norm, target, floor)
                                     if self.line_search else 0)
         dx.destroy()
+        if start is None:
+            x_n.destroy()
         problem.scatter()
         return trace
 
+    @staticmethod
+    def _reactions(problem: BlockProblem, last: Optional[np.ndarray],
+                   trace: NewtonTrace) -> np.ndarray:
+        """The internal forces of the constrained rows (the reactions) at this iterate;
+        records their largest change since ``last`` (all ranks)."""
+        now = problem.internal[problem.constrained_rows]
+        if last is not None:
+            change = float(np.abs(now - last).max(initial=0.0))
+            trace.reaction_changes.append(problem.comm.allreduce(change, op=MPI.MAX))
+        return now
+
     def _line_search(self, problem: BlockProblem, dx: PETSc.Vec, norm0: float,
-                     target: float) -> int:
+                     target: float, floor: float) -> int:
         """Halve the step ``x <- x - dx`` while the residual (pairing frozen) does not
         decrease and is not converged (at round-off it need not decrease); returns the
         halvings."""
         alpha = 1.0
         for halvings in range(5):
             norm = self._evaluate(problem, False)
-            if norm <= max((1.0 - 1e-4 * alpha) * norm0, target, problem.floor):
+            floor = _floor_if_near(problem, norm, target, floor, False)
+            if norm <= max((1.0 - 1e-4 * alpha) * norm0, target, floor):
                 return halvings
             alpha *= 0.5
             problem.x.axpy(alpha, dx)  # back from x - 2 alpha dx to x - alpha dx
         return 5
+
+
+#: the round-off floor is computed again when the residual norm comes within this factor
+#: of the last one computed (it changes little within an increment: |x| and the contact
+#: forces change by the increment), and at the increment's first iterate
+FLOOR_MARGIN = 100.0
+
+
+def _floor_if_near(problem: BlockProblem, norm: float, target: float, floor: float,
+                   first: bool) -> float:
+    """The residual's round-off floor (:meth:`BlockProblem.roundoff_floor`) where it may
+    decide convergence, else the last one computed: an |J| |x| product saved per
+    evaluation.  ``norm`` is the same on every rank, so all of them compute it or none."""
+    if first or (target < norm <= FLOOR_MARGIN * floor):
+        return problem.roundoff_floor()
+    return floor
+
+
+def settled(trace: NewtonTrace, problem: BlockProblem, x: PETSc.Vec, x_n: PETSc.Vec,
+            reactions: np.ndarray, tol: float) -> bool:
+    """The test of ``convergence="reactions"`` at iterate k >= 2 (collective).
+
+    With ``F`` the force scale (the largest reaction or external force) and ``u`` the
+    increment's largest displacement ``|x - x_n|``: no slave node changed its contact
+    status or master face and the line search took the whole step; the largest
+    unbalanced force (residual) is below ``tol F``; the corrections contract (theta =
+    ``|dx_k| / |dx_k-1|`` < 1, max norms) and the changes still to come, estimated as
+    theta / (1 - theta) times the last ones (a contraction's a posteriori bound), are
+    below ``tol u`` for the displacements and ``tol F`` for the reactions.
+    """
+    if len(trace.corrections) < 2 or trace.status_changes[-1] or trace.face_changes[-1] \
+            or trace.backtracks[-1]:
+        return False
+    last, before = trace.corrections[-1], trace.corrections[-2]
+    theta = last / before if before > 0.0 else 0.0
+    if theta >= 1.0:
+        return False
+    force = max(float(np.abs(reactions).max(initial=0.0)),
+                float(np.abs(problem.f_ext).max(initial=0.0)))
+    force = problem.comm.allreduce(force, op=MPI.MAX)
+    if not problem.b.norm(PETSc.NormType.NORM_INFINITY) <= tol * force:
+        return False
+    moved = x_n.copy()
+    moved.axpy(-1.0, x)
+    u = moved.norm(PETSc.NormType.NORM_INFINITY)
+    moved.destroy()
+    ahead = theta / (1.0 - theta)
+    return ahead * last <= tol * u and ahead * trace.reaction_changes[-1] <= tol * force
 
 
 def _record_changes(problem: BlockProblem, before: list, now: list, trace: NewtonTrace) -> None:

@@ -198,7 +198,8 @@ class BlockProblem:
         self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
         self._surface_dofs: Optional[np.ndarray] = None  # of all contacts (fixed in serial)
         self._modes: Optional[PETSc.NullSpace] = None
-        self.floor = 0.0
+        self._floor: Optional[float] = 0.0  # of the last residual; None: not computed yet
+        self._floor_x = self.x  # the iterate of the last residual
         self._spring = 0.0
         #: checks of an iterate (collective), each returning why it is inadmissible or None;
         #: the residual of an inadmissible iterate is infinite (Newton fails, and cuts back)
@@ -292,14 +293,14 @@ class BlockProblem:
     def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> float:
         """``b = R(x)``: the bodies' residuals minus :attr:`f_ext` plus the contact forces
         at their last :meth:`NodeToSurface.update`, zero in constrained rows.  Also sets
-        :attr:`internal` and the round-off :attr:`floor`; returns ``|b|`` (infinite, ``b``
-        untouched, when a guard finds the iterate inadmissible)."""
+        :attr:`internal`; returns ``|b|`` (infinite, ``b`` untouched, when a guard finds the
+        iterate inadmissible).  :meth:`roundoff_floor` is this residual's round-off."""
+        self._floor = 0.0
         with self.timers.measure("bulk_assembly"):
             if self._assembled:
                 self.scatter(x)
             self.inadmissible = next((r for r in (g() for g in self.guards) if r), "")
             if self.inadmissible:
-                self.floor = 0.0
                 return np.inf
             if self._K_linear is not None:  # the homogeneous linear bodies: K u
                 self._K_linear.mult(x, b)
@@ -310,24 +311,35 @@ class BlockProblem:
                 values[self.block_slice(k)] += self.bodies[k].residual()
             values -= self.f_ext
             b.setArray(values)
-            self._scale_of_bulk(x)
         with self.timers.measure("contact_assembly"):
             for c in self.contacts:
                 c.add_residual(b)
-                c.add_roundoff(self._scale)
-            self._scale.assemble()
         r = b.getArray()
         self.internal = r + self.f_ext
-        rows = self.constrained_rows
-        r[rows] = 0.0
+        r[self.constrained_rows] = 0.0
         b.setArray(r)
-        scale = self._scale.getArray(readonly=True).copy()
-        scale[rows] = 0.0
-        self.floor = ROUNDOFF_FLOOR * np.sqrt(self.comm.allreduce(float(scale @ scale)))
-        if not np.isfinite(self.floor):  # non-finite terms: no answer to accept
-            self.inadmissible, self.floor = "the residual's terms are not finite", 0.0
-            return np.inf
-        return b.norm()
+        norm = b.norm()
+        if np.isfinite(norm):
+            self._floor, self._floor_x = None, x  # computed on demand
+        return norm
+
+    def roundoff_floor(self) -> float:
+        """The round-off of the last :meth:`residual`'s norm (collective): 2 eps times the
+        norm of ``|J_bulk| |x| + |f_ext|`` plus the contacts' terms over the free rows; no
+        tolerance can ask for less.  0 after an inadmissible or non-finite residual (never a
+        reason to accept it).  Computed on the first call after each residual."""
+        if self._floor is None:
+            with self.timers.measure("bulk_assembly"):
+                self._scale_of_bulk(self._floor_x)
+            with self.timers.measure("contact_assembly"):
+                for c in self.contacts:
+                    c.add_roundoff(self._scale)
+                self._scale.assemble()
+            scale = self._scale.getArray(readonly=True).copy()
+            scale[self.constrained_rows] = 0.0
+            floor = ROUNDOFF_FLOOR * np.sqrt(self.comm.allreduce(float(scale @ scale)))
+            self._floor = floor if np.isfinite(floor) else 0.0
+        return self._floor
 
     def _scale_of_bulk(self, x: PETSc.Vec) -> None:
         """``|J_bulk| |x| + |f_ext|`` into the round-off scale (contacts add theirs); a
