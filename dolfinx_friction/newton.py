@@ -79,10 +79,16 @@ class Newton:
         return self.linear
 
     @staticmethod
-    def _evaluate(problem: BlockProblem, pairing: bool) -> float:
+    def _evaluate(problem: BlockProblem, pairing: bool, last: Optional[float] = None) -> float:
+        """Update the contacts at :attr:`BlockProblem.x` and return the residual norm;
+        ``last``: the norm of the residual already in :attr:`BlockProblem.b` for this
+        ``x``, kept when no contact was evaluated anew (the pairing did not change)."""
+        evaluations = [c.evaluations for c in problem.contacts]
         with problem.timers.measure("contact_search"):
             for c in problem.contacts:
                 c.update(problem.x, pairing=pairing)
+        if last is not None and evaluations == [c.evaluations for c in problem.contacts]:
+            return last
         return problem.residual(problem.x, problem.b)
 
     def solve(self, problem: BlockProblem, start: Optional[PETSc.Vec] = None) -> NewtonTrace:
@@ -93,9 +99,9 @@ class Newton:
         dx = x.duplicate()
         x_n = x.copy() if start is None else start
         trace = NewtonTrace()
-        before, reactions, floor = None, None, 0.0
+        before, reactions, floor, evaluated = None, None, 0.0, None
         for it in range(self.max_iterations + 1):
-            norm = self._evaluate(problem, True)  # pairing at the accepted iterate
+            norm = self._evaluate(problem, True, evaluated)  # pairing at the accepted iterate
             trace.residuals.append(norm)
             now = [c.pairing() for c in problem.contacts]
             if before is not None:
@@ -127,8 +133,9 @@ class Newton:
                 break
             x.axpy(-1.0, dx)
             trace.corrections.append(dx.norm(PETSc.NormType.NORM_INFINITY))
-            trace.backtracks.append(self._line_search(problem, dx, norm, target, floor)
-                                    if self.line_search else 0)
+            halvings, evaluated = (self._line_search(problem, dx, norm, target, floor)
+                                   if self.line_search else (0, None))
+            trace.backtracks.append(halvings)
         dx.destroy()
         if start is None:
             x_n.destroy()
@@ -147,19 +154,19 @@ class Newton:
         return now
 
     def _line_search(self, problem: BlockProblem, dx: PETSc.Vec, norm0: float,
-                     target: float, floor: float) -> int:
+                     target: float, floor: float) -> tuple[int, Optional[float]]:
         """Halve the step ``x <- x - dx`` while the residual (pairing frozen) does not
         decrease and is not converged (at round-off it need not decrease); returns the
-        halvings."""
+        halvings and the residual norm at the accepted ``x`` (None: not evaluated)."""
         alpha = 1.0
         for halvings in range(5):
             norm = self._evaluate(problem, False)
             floor = _floor_if_near(problem, norm, target, floor, False)
             if norm <= max((1.0 - 1e-4 * alpha) * norm0, target, floor):
-                return halvings
+                return halvings, norm
             alpha *= 0.5
             problem.x.axpy(alpha, dx)  # back from x - 2 alpha dx to x - alpha dx
-        return 5
+        return 5, None
 
 
 #: the round-off floor is computed again when the residual norm comes within this factor

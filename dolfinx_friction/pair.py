@@ -298,6 +298,10 @@ class NodeToSurface:
         self._bc_cache: tuple = ((), np.zeros(0, np.int64))
         #: changes whenever the candidate couplings (the matrix pattern) change
         self.couplings_version = 0
+        #: counts the evaluations of the elements (an update that pairs the same elements
+        #: at the iterate last evaluated keeps that evaluation)
+        self.evaluations = 0
+        self._evaluated_at: Optional[tuple] = None  # (x's local values, ramp) of the last
         self._key = uuid.uuid4().hex  # names this pair in the matrices' attributes
 
     @property
@@ -407,6 +411,7 @@ class NodeToSurface:
         if self._u_n is None:
             self._u_n = x.duplicate()
         (x if start is None else start).copy(self._u_n)
+        self._evaluated_at = None
         self._saved = self._interaction.save()
         self._search(x, update_areas=True)
         self._iteration = 0
@@ -423,6 +428,7 @@ class NodeToSurface:
         if self._u_n is None:
             raise RuntimeError(f"{self.name}: call begin(x) at the start of the increment")
         inter, changed = self._interaction, False
+        evaluated = inter.elements
         if pairing and self._iteration < inter.pairing_iterations:
             inter.pair(x, self._iteration)
             if (search and self._iteration > 0
@@ -433,17 +439,34 @@ class NodeToSurface:
             inter.mark_off_surface()
         if pairing:
             self._iteration += 1
+        values = x.getArray(readonly=True)
+        if not changed and self._same_evaluation(evaluated, values):
+            inter.elements = evaluated  # paired as before at the same iterate: keep it
+            return False
         inter.evaluate(x, self._u_n, self.ramp)
+        self.evaluations += 1
+        self._evaluated_at = (values.copy(), self.ramp)
         self._u_slaves = inter.slave_displacements(x)
         return changed
 
+    def _same_evaluation(self, evaluated, values: np.ndarray) -> bool:
+        """Whether the current elements are those of the last evaluation (the same
+        candidates) at the same iterate and ramp, on every rank (collective)."""
+        now, last = self._interaction.elements, self._evaluated_at
+        same = (last is not None and evaluated is not None and evaluated.result is not None
+                and last[1] == self.ramp and np.array_equal(now.candidate, evaluated.candidate)
+                and np.array_equal(last[0], values))
+        return self.comm.allreduce(int(not same)) == 0
+
     def commit(self) -> None:
         """Accept the increment: its trial friction history becomes the start state."""
+        self._evaluated_at = None
         self._interaction.commit()
         self._saved = None
 
     def rollback(self) -> None:
         """Forget the increment: restore the history saved by :meth:`begin`."""
+        self._evaluated_at = None
         if self._saved is not None:
             self._interaction.restore(self._saved)
 

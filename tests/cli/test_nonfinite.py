@@ -71,8 +71,8 @@ def poison(monkeypatch):
         count = [0]
         original = newton_module.Newton.solve
 
-        def solve(self, problem):
-            trace = original(self, problem)
+        def solve(self, problem, **kwargs):
+            trace = original(self, problem, **kwargs)
             count[0] += 1
             if count[0] not in solves:
                 return trace
