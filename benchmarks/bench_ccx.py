@@ -3,6 +3,8 @@
     python benchmarks/bench_ccx.py              # n = 6, 8, 10: ~1.6e4, ~3.5e4, ~6.7e4 dofs
     python benchmarks/bench_ccx.py --quick      # n = 3, 4, 5 (< 2 min)
     python benchmarks/bench_ccx.py --sizes 6,10 --no-results
+    python benchmarks/bench_ccx.py --kinds hertz,ironing,small3d,block3d
+    python benchmarks/bench_ccx.py --kinds hertz,ironing,small3d,block3d --quick --no-results
 
 The scene of ``bench_cost.py`` (block on a foundation, structured first-order hexahedra,
 E = 1000, nu = 0.3, linear law K = 50 E, sigma_inf = E/70000, c0 = 1e-3, mu = 0.3,
@@ -17,6 +19,20 @@ Measured per size, alternately in this one process: wall and CPU time of ``ccx``
 writing the deck, iterations, and the reactions on the pushed top and the fixed bottom in every
 increment: ``|R - R_ccx| / |R_ccx|``.
 
+``--kinds``: the problems CalculiX users run instead (the section "Side by side with
+CalculiX: the problems its users run" of RESULTS.md), each case's 3D scene in both codes and,
+where the kind has one, its plane-strain 2D twin in ours:
+
+* ``hertz`` -- the Hertz cylinder of ``demos/hertz_cylinder.py``, one layer of hexahedra
+  (``_meshes.one_layer``), frictionless, h = 0.08, 0.05, 0.04, 0.026 (11k, 23k, 33k, 71k
+  dofs), 2D twin;
+* ``ironing`` -- the ironing of ``test_calculix_nlgeom.py`` (``ironing_mesh``, one layer),
+  linear bodies, mu = 0.3, nx x ny = 100 x 20, 120 x 24, 150 x 30, 216 x 44 (15k, 22k, 34k,
+  71k dofs), 2D twin (``ironing_mesh(dim=2)``);
+* ``small3d`` -- the block on a foundation at n = 2 (801 dofs), slid in 10 increments;
+* ``block3d`` -- the same at n = 6, 8 (16k, 35k dofs), slid in 2 increments;
+  small3d and block3d with mu = 0.3 and frictionless.
+
 Target: at >= 30k dofs, our total wall time <= 0.5 x CalculiX's.  Because the machine is
 shared, the ratio is given for wall and for CPU time; the CPU ratio is the one that does not
 depend on the other jobs.
@@ -28,7 +44,9 @@ import json
 import re
 import sys
 import time
+from functools import partial
 from pathlib import Path
+from typing import Callable, NamedTuple
 
 import _bench as B  # noqa: I001
 import numpy as np
@@ -93,17 +111,32 @@ def compare(scene, groups, label: str) -> dict:
                           if big[-1] else None})
     row["diffs"] = diffs
     row["worst"] = max((d["rel"] for d in diffs if "rel" in d), default=float("nan"))
-    row["reactions"] = [{g: list(map(float, inc.reactions[g])) for g in groups}
-                        for inc in result.increments]
+    row.update(our_reactions(result, groups))
     return row
+
+
+def our_reactions(result, groups) -> dict:
+    """Every increment's pseudo-time (``times``) and reactions of ``groups``."""
+    return {"times": [float(inc.t) for inc in result.increments],
+            "reactions": [{g: list(map(float, inc.reactions[g])) for g in groups}
+                          for inc in result.increments]}
 
 
 # ----------------------------------------------------------------------------- kinds
 #: Hertz cylinder on a block (demos/hertz_cylinder.py's geometry and mesh), one layer thick
 HERTZ_K, HERTZ_INCREMENTS, HERTZ_PRESS, LAYER = 1.0e7, 10, 0.25, 0.1
-HERTZ_SIZES, HERTZ_QUICK = (0.08, 0.05, 0.04), (0.08,)
-IRONING_SIZES, IRONING_QUICK = ((20.0, 120, 24, 40),), ((10.0, 40, 6, 32),)
+#: 11k, 23k, 33k, 71k dofs (ccx 2.20 stops in the first increment at 0.04 and 0.026:
+#: "nonpositive jacobian determinant")
+HERTZ_SIZES, HERTZ_QUICK = (0.08, 0.05, 0.04, 0.026), (0.08,)
+#: ironing (block length, nx, ny, cells on the die's arc): 15k, 22k, 34k, 71k dofs in 3D
+#: (at 71k ccx 2.20 stops in drag increment 32 of 40: "solution seems to diverge")
+IRONING_SIZES = ((20.0, 100, 20, 32), (20.0, 120, 24, 40), (20.0, 150, 30, 50),
+                 (20.0, 216, 44, 72))
+IRONING_QUICK = ((10.0, 40, 6, 32),)
+#: block on a foundation (bench_cost.scene): resolution n, 16k and 35k dofs
+BLOCK3D_SIZES, BLOCK3D_QUICK, MUS = (6, 8), (3,), (0.3, 0.0)
 HERTZ_GROUPS, IRONING_GROUPS = ("cylinder_top", "block_bottom"), ("die_top", "block_bottom")
+KINDS = ("hertz", "ironing", "small3d", "block3d")
 
 
 def hertz_scene(h: float, three_d: bool):
@@ -135,70 +168,123 @@ def hertz_scene(h: float, three_d: bool):
                  output=Output(fields=False, contact_table=False, reactions=HERTZ_GROUPS))
 
 
-def ironing_scene(size):
-    """The one-layer plane-strain ironing of tests/verification/test_calculix_nlgeom.py,
-    linear bodies, mu = 0.3, pressed in 10 and dragged in 40 increments."""
+def ironing_scene(size: tuple, three_d: bool):
+    """The plane-strain ironing of tests/verification/test_calculix_nlgeom.py, linear
+    bodies, mu = 0.3, pressed in 10 and dragged in 40 increments: one layer of hexahedra
+    (thickness length / nx) or the same quadrilaterals in 2D.  The block's rows graded
+    alike at every size: ``bias ** ny = 0.9 ** 24`` (``ny <= 6``: bias 0.75)."""
     from tests.verification import test_calculix_nlgeom as T
     length, nx, ny, n_arc = size
-    path = B.work_dir("ccx") / f"ironing_{nx}x{ny}.msh"
+    dim = 3 if three_d else 2
+    path = B.work_dir("ccx") / f"ironing_{length:g}_{nx}x{ny}_{n_arc}_{dim}d.msh"
     if not path.exists():
-        T.ironing_mesh(path, length=length, nx=nx, ny=ny, bias=0.9 if ny > 6 else 0.75,
-                       n_arc=n_arc)
-    return T.ironing_scene(path, "linear", press_increments=10, drag_increments=40)
+        T.ironing_mesh(path, length=length, nx=nx, ny=ny, n_arc=n_arc, dim=dim,
+                       bias=0.9 ** (24 / ny) if ny > 6 else 0.75)
+    return T.ironing_scene(path, "linear", press_increments=10, drag_increments=40, dim=dim)
+
+
+class Case(NamedTuple):
+    """One row of a kind: the 3D scene both codes solve and, if any, its 2D twin."""
+    size: object  # the table's size column: h, nx x ny or n
+    mu: float
+    label: str
+    make: Callable  # () -> the 3D Scene
+    groups: tuple[str, str]
+    flat: Callable | None = None  # () -> the plane-strain 2D twin (ours only)
+    thickness: float = 1.0  # the 3D twin's (2D reactions are per unit thickness)
+
+
+def kind_cases(kind: str, quick: bool) -> list[Case]:
+    if kind == "hertz":
+        return [Case(h, 0.0, f"hertz_h{h}", partial(hertz_scene, h, True), HERTZ_GROUPS,
+                     partial(hertz_scene, h, False), LAYER)
+                for h in (HERTZ_QUICK if quick else HERTZ_SIZES)]
+    if kind == "ironing":
+        return [Case(f"{s[1]}x{s[2]}", 0.3, f"ironing_{s[1]}x{s[2]}",
+                     partial(ironing_scene, s, True), IRONING_GROUPS,
+                     partial(ironing_scene, s, False), s[0] / s[1])
+                for s in (IRONING_QUICK if quick else IRONING_SIZES)]
+    if kind in ("small3d", "block3d"):
+        sizes = (2,) if kind == "small3d" else BLOCK3D_QUICK if quick else BLOCK3D_SIZES
+        slide = 10 if kind == "small3d" else 2
+        return [Case(n, mu, f"{kind}_n{n}_mu{mu:g}",
+                     partial(C.scene, n, slide_increments=slide, mu=mu), GROUPS)
+                for n in sizes for mu in MUS]
+    raise SystemExit(f"--kinds: unknown kind {kind!r} ({', '.join(KINDS)})")
+
+
+def twin_rel(row: dict, flat, group: str, thickness: float) -> float:
+    """Worst ``|R_3D - thickness R_2D| / |R_3D|`` of ``group`` (in-plane components) over
+    the pseudo-times both runs reached (either may have cut back)."""
+    twin = {round(t, 9): np.asarray(r[group][:2]) for t, r in zip(row["times"],
+                                                                   row["reactions"])}
+    pairs = [(twin[round(i.t, 9)], thickness * np.asarray(i.reactions[group]))
+             for i in flat.increments if round(i.t, 9) in twin]
+    return max(float(np.linalg.norm(a - b) / np.linalg.norm(a)) for a, b in pairs)
+
+
+def ccx_stop(exc: Exception, label: str) -> str:
+    """Why and where ccx stopped: its last ``*ERROR`` message on one line, after the last
+    increment of its status file (the one it did not converge in) if it has any."""
+    lines = str(exc).splitlines()
+    start = max((i for i, ln in enumerate(lines) if "*ERROR" in ln), default=len(lines) - 1)
+    why = " ".join(" ".join(lines[start:]).split())
+    sta = B.work_dir("ccx") / f"{label}.sta"
+    incs = [ln.split() for ln in (sta.read_text().splitlines() if sta.exists() else [])
+            if ln.split()[:1] and ln.split()[0].isdigit()]
+    return (f"step {incs[-1][0]} increment {incs[-1][1]}: " if incs else "") + why
 
 
 def kind_rows(kind: str, quick: bool):
-    """The rows of one problem kind, one at a time (both codes; Hertz also ours in true
-    2D).  A case ccx does not finish is a row with ``ccx_error`` and ours alone."""
+    """The rows of one problem kind, one at a time (both codes; ours also in true 2D where
+    the kind has a 2D twin).  A case ccx does not finish is a row with ``ccx_error`` and
+    ours alone."""
     from dolfinx_friction.calculix import CcxError
-    if kind == "hertz":
-        cases = [(h, lambda h=h: hertz_scene(h, True), HERTZ_GROUPS, f"hertz_h{h}")
-                 for h in (HERTZ_QUICK if quick else HERTZ_SIZES)]
-    elif kind == "ironing":
-        cases = [(size[1], lambda size=size: ironing_scene(size), IRONING_GROUPS,
-                  f"ironing_{size[1]}x{size[2]}")
-                 for size in (IRONING_QUICK if quick else IRONING_SIZES)]
-    elif kind == "small3d":
-        cases = [(2, lambda: C.scene(2, slide_increments=10), GROUPS, "small3d_n2")]
-    else:
-        raise SystemExit(f"--kinds: unknown kind {kind!r} (hertz, ironing, small3d)")
-    for size, make, groups, label in cases:
+    for case in kind_cases(kind, quick):
+        row = {"kind": kind, "size": case.size, "mu": case.mu}
+        c0 = B.children_cpu()
         try:
-            row = {"kind": kind, "size": size, **compare(make(), groups, label)}
+            row.update(compare(case.make(), case.groups, case.label))
         except CcxError as exc:
-            _, ours = B.timed_run(make())
-            row = {"kind": kind, "size": size, "ours": ours,
-                   "ccx_error": str(exc).splitlines()[-1].strip()}
-        if kind == "hertz":
-            result, row["ours_2d"] = B.timed_run(hertz_scene(size, False))
-            if "reactions" in row:
-                # 2D reactions are per unit thickness: the twin carries LAYER times them
-                twin = [np.asarray(r["cylinder_top"][:2]) for r in row["reactions"]]
-                flat = [LAYER * np.asarray(i.reactions["cylinder_top"])
-                        for i in result.increments]
-                row["twin_rel"] = max(float(np.linalg.norm(a - b) / np.linalg.norm(a))
-                                      for a, b in zip(twin, flat))
+            row.update(ccx_error=ccx_stop(exc, case.label), ccx_cpu_stop=B.children_cpu() - c0)
+            result, row["ours"] = B.timed_run(case.make())
+            row.update(our_reactions(result, case.groups))
+        if case.flat is not None:
+            result, row["ours_2d"] = B.timed_run(case.flat())
+            row["twin_rel"] = twin_rel(row, result, case.groups[0], case.thickness)
         yield row
 
 
+def _series(ax, rows, point, fmt: str, color: str, label: str, hollow: bool) -> None:
+    """One line of ``point(row) -> (dofs, CPU seconds) or None`` over ``rows``."""
+    xy = [p for p in map(point, rows) if p is not None]
+    if xy:
+        ax.loglog(*zip(*xy), fmt, color=color, label=label,
+                  markerfacecolor="none" if hollow else color)
+
+
 def kinds_chart(rows, machine) -> Path:
-    """CPU time against dofs, both codes, one panel per problem kind."""
+    """CPU time against dofs, both codes (and ours in 2D), one panel per problem kind, one
+    line per friction coefficient (frictionless: dotted, hollow markers, where a kind has
+    both)."""
     plt = B.pyplot()
     kinds = list(dict.fromkeys(r["kind"] for r in rows))
     fig, axes = plt.subplots(1, len(kinds), figsize=(4.5 * len(kinds), 4.2), dpi=100,
                              squeeze=False)
     for ax, kind in zip(axes[0], kinds):
         mine = [r for r in rows if r["kind"] == kind]
-        x = [r["ours"]["dofs"] for r in mine]
-        ax.loglog(x, [r["ours"]["cpu"] for r in mine], "o-", color="#1f77b4",
-                  label="dolfinx_friction (3D)")
-        both = [r for r in mine if "ccx_cpu" in r]
-        ax.loglog([r["ours"]["dofs"] for r in both], [r["ccx_cpu"] for r in both], "s-",
-                  color="#d62728", label="CalculiX (3D)")
-        flat = [r for r in mine if "ours_2d" in r]
-        if flat:
-            ax.loglog([r["ours_2d"]["dofs"] for r in flat], [r["ours_2d"]["cpu"] for r in flat],
-                      "^--", color="#2ca02c", label="dolfinx_friction, true 2D")
+        mus = sorted({r["mu"] for r in mine}, reverse=True)
+        for mu in mus:
+            sub = [r for r in mine if r["mu"] == mu]
+            tag, dotted = (f", mu = {mu:g}", mu == 0) if len(mus) > 1 else ("", False)
+            ls = ":" if dotted else "-"
+            _series(ax, sub, lambda r: (r["ours"]["dofs"], r["ours"]["cpu"]), "o" + ls,
+                    "#1f77b4", f"dolfinx_friction (3D){tag}", dotted)
+            _series(ax, sub, lambda r: (r["ours"]["dofs"], r["ccx_cpu"]) if "ccx_cpu" in r
+                    else None, "s" + ls, "#d62728", f"CalculiX (3D){tag}", dotted)
+            _series(ax, sub, lambda r: (r["ours_2d"]["dofs"], r["ours_2d"]["cpu"])
+                    if "ours_2d" in r else None, "^--", "#2ca02c",
+                    f"dolfinx_friction, true 2D{tag}", dotted)
         ax.set_title(kind, fontsize=10)
         ax.set_xlabel("dofs")
         ax.set_ylabel("CPU seconds (whole analysis)")
@@ -213,10 +299,23 @@ def kinds_chart(rows, machine) -> Path:
     return path
 
 
+def _ccx_cells(r: dict) -> dict:
+    """CalculiX's cells of a kinds table row ("-" where ccx stopped)."""
+    if "ccx_error" in r:
+        return dict.fromkeys(("cpu", "cpu_ratio", "wall", "wall_ratio", "worst", "load"), "-") | {
+            "solves": f"ccx stops after {B.fmt_s(r['ccx_cpu_stop'])} s CPU: {r['ccx_error']}"}
+    o = r["ours"]
+    return {"solves": f"{r['ccx_solves']} / {r['ccx_increments']}",
+            "cpu": B.fmt_s(r["ccx_cpu"]), "cpu_ratio": f"{o['cpu'] / r['ccx_cpu']:.2f}",
+            "wall": B.fmt_s(r["ccx_wall"]), "wall_ratio": f"{o['wall'] / r['ccx_wall']:.2f}",
+            "worst": f"{100 * r['worst']:.3f}", "load": f"{r['ccx_load'][0]:.1f}"}
+
+
 def kinds_report(rows, machine, load_end) -> str:
     from dolfinx_friction import calculix
+    kinds = ",".join(dict.fromkeys(r["kind"] for r in rows))
     out = [
-        "`benchmarks/bench_ccx.py --kinds hertz,ironing,small3d`: the problems CalculiX users "
+        f"`benchmarks/bench_ccx.py --kinds {kinds}`: the problems CalculiX users "
         "run (issue 14), one `Scene` per case solved by dolfinx_friction and written by "
         f"`calculix.write_inp` for `{calculix.ccx_executable()}` (single-threaded, SPOOLES), "
         "one after the other in this process; an untimed warm-up run first.",
@@ -224,13 +323,16 @@ def kinds_report(rows, machine, load_end) -> str:
         "* hertz: `demos/hertz_cylinder.py`'s quarter cylinder on a block (its `build_mesh`, "
         "contact-zone size h), extruded by one layer of hexahedra (`_meshes.one_layer`, "
         f"thickness {LAYER}, u_z = 0 on both faces), K = 1e7, frictionless, pressed "
-        f"{HERTZ_PRESS} in {HERTZ_INCREMENTS} increments; '2D' = the same quadrilaterals in "
-        "plane strain (ours only: the deck writer has no 2D elements), its reactions x "
-        "thickness against the twin's.",
-        "* ironing: `test_calculix_nlgeom.ironing_mesh` (one hexahedron layer), linear bodies, "
-        "mu = 0.3, press 10 + drag 40 increments.",
-        "* small3d: the block on a foundation of `bench_cost.py` at n = 2, press 1 + slide 10 "
-        "increments, mu = 0.3.",
+        f"{HERTZ_PRESS} in {HERTZ_INCREMENTS} increments.",
+        "* ironing: `test_calculix_nlgeom.ironing_mesh` (block L x 5 of nx x ny cells, L = 20, "
+        "--quick 10; one hexahedron layer of thickness L / nx, u_z = 0 on both faces), linear "
+        "bodies, mu = 0.3, press 10 + drag 40 increments.",
+        "* '2D' (hertz, ironing) = the same quadrilaterals in plane strain, ours only (the deck "
+        "writer has no 2D elements); dR = the worst |R_3D - thickness x R_2D| / |R_3D| of the "
+        "pushed group over the increments both reached.",
+        "* small3d, block3d: the block on a foundation of `bench_cost.py` at n = 2 (press 1 + "
+        "slide 10 increments) and n = 6, 8 (press 1 + slide 2, the default mode's scene), "
+        "mu = 0.3 and frictionless.",
         f"* {B.machine_line(machine, load_end)}",
         "* ours = the whole `run()`; ccx = the whole `ccx` process.  CPU: our process / the "
         "ccx child (`RUSAGE_CHILDREN`); the machine's 2 cores are shared with other jobs, so "
@@ -239,24 +341,15 @@ def kinds_report(rows, machine, load_end) -> str:
     ]
     trs = []
     for r in rows:
-        o = r["ours"]
-        two = r.get("ours_2d")
-        if "ccx_error" in r:
-            trs.append([r["kind"], r["size"], f"{o['dofs']:,}",
-                        f"{o['newton']} / {o['increments']}", f"ccx stops: {r['ccx_error']}",
-                        B.fmt_s(o["cpu"]), "-", "-", B.fmt_s(o["wall"]), "-", "-", "-",
-                        "-" if two is None else f"{two['dofs']:,}: {B.fmt_s(two['cpu'])} s CPU",
-                        f"{o['load'][0]:.1f}"])
-            continue
-        trs.append([r["kind"], r["size"], f"{o['dofs']:,}", f"{o['newton']} / {o['increments']}",
-                    f"{r['ccx_solves']} / {r['ccx_increments']}",
-                    B.fmt_s(o["cpu"]), B.fmt_s(r["ccx_cpu"]), f"{o['cpu'] / r['ccx_cpu']:.2f}",
-                    B.fmt_s(o["wall"]), B.fmt_s(r["ccx_wall"]),
-                    f"{o['wall'] / r['ccx_wall']:.2f}", f"{100 * r['worst']:.3f}",
+        o, two, c = r["ours"], r.get("ours_2d"), _ccx_cells(r)
+        trs.append([r["kind"], r["size"], f"{r['mu']:g}", f"{o['dofs']:,}",
+                    f"{o['newton']} / {o['increments']}", c["solves"], B.fmt_s(o["cpu"]),
+                    c["cpu"], c["cpu_ratio"], B.fmt_s(o["wall"]), c["wall"], c["wall_ratio"],
+                    c["worst"],
                     "-" if two is None else (f"{two['dofs']:,}: {B.fmt_s(two['cpu'])} s CPU, "
                                              f"{two['newton']} its, dR {r['twin_rel']:.1e}"),
-                    f"{r['ccx_load'][0]:.1f} / {o['load'][0]:.1f}"])
-    out.append(B.table(["kind", "size", "dofs", "our its / incs", "ccx solves / incs",
+                    f"{c['load']} / {o['load'][0]:.1f}"])
+    out.append(B.table(["kind", "size", "mu", "dofs", "our its / incs", "ccx solves / incs",
                         "our CPU [s]", "ccx CPU [s]", "CPU ratio", "our wall [s]",
                         "ccx wall [s]", "wall ratio", "max dR/R [%]", "ours in 2D",
                         "load ccx / ours"], trs))
@@ -365,7 +458,7 @@ def main(argv=None) -> None:
     ap.add_argument("--no-results", action="store_true")
     ap.add_argument("--json", help="also write the measured rows to this file")
     ap.add_argument("--kinds", help="comma-separated problem kinds instead of the block on a "
-                    "foundation: hertz, ironing, small3d")
+                    f"foundation: {', '.join(KINDS)} (--quick: the smallest size of each)")
     args = ap.parse_args(argv)
     from dolfinx_friction import calculix
     if not calculix.ccx_available():
@@ -382,11 +475,12 @@ def main(argv=None) -> None:
             for r in kind_rows(kind, args.quick):
                 rows.append(r)
                 o = r["ours"]
-                print(f"{kind} {r['size']} dofs={o['dofs']}: ours {o['newton']} its cpu "
-                      f"{o['cpu']:.1f} s wall {o['wall']:.1f} s phases {o['phases']} | ccx "
+                print(f"{kind} {r['size']} mu={r['mu']:g} dofs={o['dofs']}: ours {o['newton']} "
+                      f"its cpu {o['cpu']:.1f} s wall {o['wall']:.1f} s phases {o['phases']} | ccx "
                       f"{r.get('ccx_solves')} solves cpu {r.get('ccx_cpu')} s wall "
                       f"{r.get('ccx_wall')} s {r.get('ccx_error', '')} | max dR/R "
-                      f"{r.get('worst')} | 2D {r.get('ours_2d', {}).get('cpu')} | load "
+                      f"{r.get('worst')} | 2D cpu {r.get('ours_2d', {}).get('cpu')} s dR "
+                      f"{r.get('twin_rel')} | load "
                       f"{B.load_average():.1f}", flush=True)
                 if args.json:
                     Path(args.json).write_text(json.dumps(rows, indent=1))

@@ -66,11 +66,13 @@ def two_boxes_mesh(n: int) -> Path:
     return path
 
 
-def scene(n: int, contact: bool = True, slide_increments: int = 2):
+def scene(n: int, contact: bool = True, slide_increments: int = 2, mu: float = MU):
+    """The block on a foundation at resolution ``n`` (module docstring); ``mu = 0``:
+    frictionless."""
     from dolfinx_friction.model import BC, Body, ContactPair, Output, Scene, Step
     return Scene(
         mesh=two_boxes_mesh(n), bodies=(Body("block", E, NU), Body("foundation", E, NU)),
-        contacts=(ContactPair("block_bottom", "foundation_top", mu=MU, K="calculix",
+        contacts=(ContactPair("block_bottom", "foundation_top", mu=mu, K="calculix",
                               stick_slope="calculix"),) if contact else (),
         steps=(Step("press", increments=1, bcs=(BC("foundation_bottom", (0.0, 0.0, 0.0)),
                                                 BC("block_top", (0.0, 0.0, -PRESS)))),

@@ -157,16 +157,17 @@ def test_neo_hookean_press_and_shear_matches_calculix(tmp_path):
 
 def ironing_mesh(path, length: float = 10.0, height: float = 5.0, radius: float = 2.0,
                  x0: float = 3.0, nx: int = 40, ny: int = 6, bias: float = 0.75,
-                 n_arc: int = 32, thickness=None):
-    """One layer of hexahedra of the plane-strain ironing geometry, structured.
+                 n_arc: int = 32, thickness=None, dim: int = 3):
+    """The plane-strain ironing geometry, structured: one layer of hexahedra (``dim = 3``)
+    or its quadrilaterals (``dim = 2``: the same nodes as the hexahedra's face z = 0).
 
     Block ``[0, length] x [0, height]`` (``nx`` x ``ny`` cells, rows graded by ``bias``
     towards the top), half-disk die of ``radius`` centred at ``(x0, height + radius)``
     with its flat top there, as an O-grid (a core square and three patches under the
-    arc, ``n_arc`` faces along the arc); extruded by one layer of ``thickness``
+    arc, ``n_arc`` faces along the arc); in 3D extruded by one layer of ``thickness``
     (default ``length / nx``) along z.  Groups: ``block``, ``die``; ``block_top``,
-    ``block_bottom``, ``block_faces`` (z = 0 and z = thickness), ``die_surface`` (the
-    arc), ``die_top``, ``die_faces``.
+    ``block_bottom``, ``die_surface`` (the arc), ``die_top``; in 3D also ``block_faces``
+    and ``die_faces`` (z = 0 and z = thickness).
     """
     import math
 
@@ -174,7 +175,7 @@ def ironing_mesh(path, length: float = 10.0, height: float = 5.0, radius: float 
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
     try:
-        gmsh.model.add("ironing_one_layer")
+        gmsh.model.add("ironing_one_layer" if dim == 3 else "ironing_2d")
         geo = gmsh.model.geo
         t = thickness if thickness is not None else length / nx
         p = [geo.addPoint(0, 0, 0), geo.addPoint(length, 0, 0), geo.addPoint(length, height, 0),
@@ -205,36 +206,45 @@ def ironing_mesh(path, length: float = 10.0, height: float = 5.0, radius: float 
         for curve, n in ((arcs[0], n1), (arcs[2], n1), (ab, n1), (cd, n1), (arcs[1], n2),
                          (bc, n2), (da, n2), (Bb, n1), (Cc, n1), (Dd, n1), (Aa, n1)):
             m.setTransfiniteCurve(curve, n + 1)
-        for surface in (block, *die.values()):
+        sources = [block, *die.values()]
+        for surface in sources:
             m.setTransfiniteSurface(surface)
             m.setRecombine(2, surface)
-        sources = [block, *die.values()]
-        ext = geo.extrude([(2, x) for x in sources], 0, 0, t, numElements=[1], recombine=True)
+        # the 2D entities themselves, or (3D) what the extrusion makes of them
+        body, side = {x: x for x in sources}, {}
+        if dim == 3:
+            ext = geo.extrude([(2, x) for x in sources], 0, 0, t, numElements=[1],
+                              recombine=True)
+            # per source surface: its copy at z = t, the volume, the lateral surfaces
+            copies = []
+            for k, (src, curves) in enumerate(zip(sources, [[bottom, right, top, left],
+                                                             *loops.values()])):
+                chunk = ext[6 * k:6 * k + 6]
+                copies.append(chunk[0][1])
+                body[src] = chunk[1][1]
+                for curve, (_, lat) in zip(curves, chunk[2:]):
+                    side.setdefault(abs(curve), lat)
         geo.synchronize()
-        # per source surface: its copy at z = t, the volume, the lateral surfaces (curve order)
-        copies, volumes, lateral = [], [], {}
-        for k, (src, curves) in enumerate(zip(sources, [[bottom, right, top, left],
-                                                         *loops.values()])):
-            chunk = ext[6 * k:6 * k + 6]
-            copies.append(chunk[0][1])
-            volumes.append(chunk[1][1])
-            for curve, (_, lat) in zip(curves, chunk[2:]):
-                lateral.setdefault(abs(curve), lat)
 
-        def group(dim, tags, name):
-            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
+        def group(d, tags, name):
+            gmsh.model.setPhysicalName(d, gmsh.model.addPhysicalGroup(d, tags), name)
 
-        group(3, volumes[:1], "block")
-        group(3, volumes[1:], "die")
-        group(2, [lateral[top]], "block_top")
-        group(2, [lateral[bottom]], "block_bottom")
-        group(2, [block, copies[0]], "block_faces")
-        group(2, [lateral[arc] for arc in arcs], "die_surface")
-        group(2, [lateral[Aa], lateral[da], lateral[Dd]], "die_top")
-        group(2, [*die.values(), *copies[1:]], "die_faces")
-        gmsh.model.mesh.generate(3)
-        types = list(gmsh.model.mesh.getElementTypes(3))
-        assert types == [5], f"not all hexahedra: gmsh element types {types}"
+        def facets(curves):
+            return [side.get(abs(c), abs(c)) for c in curves]
+
+        group(dim, [body[block]], "block")
+        group(dim, [body[x] for x in die.values()], "die")
+        group(dim - 1, facets([top]), "block_top")
+        group(dim - 1, facets([bottom]), "block_bottom")
+        if dim == 3:
+            group(2, [block, copies[0]], "block_faces")
+        group(dim - 1, facets(arcs), "die_surface")
+        group(dim - 1, facets([Aa, da, Dd]), "die_top")
+        if dim == 3:
+            group(2, [*die.values(), *copies[1:]], "die_faces")
+        gmsh.model.mesh.generate(dim)
+        types = list(gmsh.model.mesh.getElementTypes(dim))
+        assert types == [5 if dim == 3 else 3], f"not all hexahedra / quadrilaterals: {types}"
         gmsh.write(str(path))
     finally:
         gmsh.finalize()
@@ -243,22 +253,27 @@ def ironing_mesh(path, length: float = 10.0, height: float = 5.0, radius: float 
 
 def ironing_scene(mesh, block_model: str = "neo-hookean", depth: float = 1.25,
                   drag: float = 1.5, press_increments: int = 4,
-                  drag_increments: int = 12) -> Scene:
-    """The plane-strain ironing on a one-layer mesh of :func:`ironing_mesh`."""
-    plane = (BC("block_faces", (None, None, 0.0)), BC("die_faces", (None, None, 0.0)))
+                  drag_increments: int = 12, dim: int = 3) -> Scene:
+    """The plane-strain ironing on a mesh of :func:`ironing_mesh` of dimension ``dim``
+    (3: one layer, ``u_z = 0`` on both faces)."""
+    def u(*c):
+        return c + (0.0,) if dim == 3 else c
+
+    plane = ((BC("block_faces", (None, None, 0.0)), BC("die_faces", (None, None, 0.0)))
+             if dim == 3 else ())
     return Scene(
         mesh=mesh,
         bodies=(Body("block", 10.0, 0.3, model=block_model), Body("die", 1.0e4, 0.3)),
         contacts=(ContactPair("block_top", "die_surface", mu=0.3, K="calculix",
                               stick_slope="calculix"),),
         steps=(Step("press", increments=press_increments,
-                    bcs=(BC("block_bottom", (0.0, 0.0, 0.0)),
-                         BC("die_top", (0.0, -depth, 0.0))) + plane),
+                    bcs=(BC("block_bottom", u(0.0, 0.0)),
+                         BC("die_top", u(0.0, -depth))) + plane),
                Step("drag", increments=drag_increments,
-                    bcs=(BC("die_top", (drag, -depth, 0.0)),))),
+                    bcs=(BC("die_top", u(drag, -depth)),))),
         output=Output(reactions=("die_top", "block_bottom"), fields=False),
-        title="plane-strain ironing of a Neo-Hookean block, one hexahedron layer "
-              "(CalculiX NLGEOM comparison)")
+        title=f"plane-strain ironing of a {block_model} block"
+              + (", one hexahedron layer" if dim == 3 else "") + " (CalculiX NLGEOM comparison)")
 
 
 def ironing_figures(reactions: dict, last: int = 4) -> dict:
