@@ -221,7 +221,8 @@ class NodeToSurface:
         The slave surface's node spacing ``h`` [length] the defaults are scaled with: the
         median over all slave nodes (all ranks) of each node's spacing in the reference
         configuration (its representative area per thickness in 2D, the square root of it
-        in 3D; :class:`~dolfinx_friction.surfaces.SlaveNodes`).
+        in 3D; :class:`~dolfinx_friction.surfaces.SlaveNodes`), to 12 significant digits
+        (the same on any number of ranks).
     law, stick_slope, mu
         The contact law as used, defaults resolved (:meth:`resolved`).
     ramp : float
@@ -285,7 +286,9 @@ class NodeToSurface:
             master_side = master_faces(self._master_field, "master")
         slaves = SlaveNodes(slave_field, "slave")
         self._slave_field = slave_field
-        self.spacing = float(np.median(np.concatenate(comm.allgather(slaves.spacing))))
+        # a node's area sums its faces' shares in an order that depends on the partition:
+        # 12 digits make h, and the defaults scaled with it, the same on any number of ranks
+        self.spacing = float(f"{np.median(np.concatenate(comm.allgather(slaves.spacing))):.12g}")
         self.params = self._parameters(given, law, E)
         self._interaction = ContactInteraction(comm, name, self.params.element, slaves,
                                                master_side, self.gdim,
