@@ -178,8 +178,8 @@ class BlockProblem:
         self._prescribed_values = np.zeros(0)
         self._constrained = self._bc_rows
         self.gather()
-        self._base = self._bulk_pattern()
-        self._linear_data = {k: self._base.gather_values(k, body.jacobian_values())
+        self._base, values = self._bulk_pattern()
+        self._linear_data = {k: self._base.gather_values(k, values[k])
                              for k, body in enumerate(self.bodies) if body.linear}
         #: bodies whose residual dolfinx assembles (the others are K u)
         self._assembled = [k for k, body in enumerate(self.bodies) if not body.homogeneous]
@@ -278,17 +278,20 @@ class BlockProblem:
         return np.setdiff1d(rows, self._prescribed_rows)
 
     # ------------------------------------------------------------ assembly
-    def _bulk_pattern(self) -> CooPattern:
+    def _bulk_pattern(self) -> tuple[CooPattern, list[np.ndarray]]:
+        """The pattern of the bodies' Jacobians in the block numbering, and each body's
+        CSR values at its current ``u`` (assembled once for both)."""
         d = self.gdim
-        blocks = []
+        blocks, values = [], []
         for k, body in enumerate(self.bodies):
-            compat.assemble_matrix_into(body.A, body.J)
-            indptr, cols, _ = body.A.getValuesCSR()
+            compat.assemble_matrix_into(body.A, body.J)  # a new matrix: zero before
+            indptr, cols, data = body.A.getValuesCSR()
+            values.append(data)
             rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
             cols = cols.astype(np.int64)
             blocks.append((self.layout.nodes(k)[rows // d] * d + rows % d,
                            self.layout.from_block_global(k, cols // d) * d + cols % d))
-        return CooPattern(self.comm, self.layout.n_owned * d, blocks)
+        return CooPattern(self.comm, self.layout.n_owned * d, blocks), values
 
     def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> float:
         """``b = R(x)``: the bodies' residuals minus :attr:`f_ext` plus the contact forces
