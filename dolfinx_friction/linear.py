@@ -282,15 +282,16 @@ class Condensed:
         self._spent += flops
         if len(new):
             self._add_columns(new)
+        n = len(active)
         index = np.searchsorted(active, np.stack([split.rows, split.cols]))
-        C = np.zeros((len(active), len(active)))
-        np.add.at(C, (index[0], index[1]), split.values)
+        C = np.bincount(index[0] * n + index[1], weights=split.values,
+                        minlength=n * n).reshape(n, n)
         cols = self._column[where]
         self._active, self._C = active, C
         self._cols = cols
         if self._Z is not None and len(self._Z) > 1:
             self._Z = [np.hstack(self._Z)]
-        self._M = np.eye(len(active)) + C @ self._G[np.ix_(where, cols)]
+        self._M = np.eye(n) + C @ self._G[np.ix_(where, cols)]
         if self._J is None:
             self._J = PETSc.Mat().createPython(self._K.getSizes(), self, comm=self._K.getComm())
             self._J.setUp()
