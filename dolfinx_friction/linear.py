@@ -271,7 +271,9 @@ class Condensed:
         if not self._regular:  # e.g. a body held by the contact alone: K is singular
             return False
         self._set_dofs(split.dofs)
-        active = np.union1d(split.rows, split.cols)
+        coupled = np.zeros(self._K.getSize()[0], bool)
+        coupled[split.rows] = coupled[split.cols] = True
+        active = np.flatnonzero(coupled)
         where = np.searchsorted(self._dofs, active).clip(max=max(len(self._dofs) - 1, 0))
         if len(active) and (not len(self._dofs) or (self._dofs[where] != active).any()):
             return False  # a coupling off the surfaces: not the split assumed
@@ -283,8 +285,8 @@ class Condensed:
         if len(new):
             self._add_columns(new)
         n = len(active)
-        index = np.searchsorted(active, np.stack([split.rows, split.cols]))
-        C = np.bincount(index[0] * n + index[1], weights=split.values,
+        position = np.cumsum(coupled) - 1  # of each active dof among them
+        C = np.bincount(position[split.rows] * n + position[split.cols], weights=split.values,
                         minlength=n * n).reshape(n, n)
         cols = self._column[where]
         self._active, self._C = active, C
