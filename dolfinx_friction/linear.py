@@ -173,9 +173,8 @@ class Condensed:
 
     ``G``, the entries of ``K^-1`` among the contact surfaces' dofs, is filled column by
     column as dofs become active and kept while ``K`` (the same matrix object) does; the
-    whole columns ``K^-1 P`` too while their product costs fewer flops than a back-solve
-    (2 x their entries against 4 x the factors': at most twice the factors' memory; then
-    ``K^-1 (r - P_A w) = K^-1 r - (K^-1 P_A) w`` needs one back-solve instead of two).
+    whole columns ``K^-1 P`` too while they take no more entries than ``K``'s factors
+    (then ``K^-1 (r - P_A w) = K^-1 r - (K^-1 P_A) w`` needs one back-solve instead of two).
     """
 
     def __init__(self, comm, prefix: str):
@@ -221,6 +220,7 @@ class Condensed:
         entries = F.getMumpsInfog(20)
         entries = entries if entries >= 0 else -entries * 1e6
         self._flops, self._solve_flops = F.getMumpsRinfog(3), 4.0 * entries
+        self._entries = entries  # whole columns of K^-1 are kept while they fit
         self._J = None  # the operator K + C
         self._dofs = np.zeros(0, np.int64)
         self._y = K.createVecLeft()
@@ -259,8 +259,8 @@ class Condensed:
         self._known[where] = True
         self._G = np.hstack([self._G] + new)
         self.columns += len(where)
-        if self._Z is not None and 2.0 * n * self._G.shape[1] > self._solve_flops:
-            self._Z = None  # their product would cost more flops than the back-solve
+        if self._Z is not None and n * self._G.shape[1] > self._entries:
+            self._Z = None  # no more memory for whole columns than the factors take
 
     def solve(self, split, b: PETSc.Vec, x: PETSc.Vec, replaced: float = 0.0) -> bool:
         """Solve with the kept bulk factorisation; False (``x`` undefined) when this path
