@@ -132,10 +132,11 @@ class LinearSolver:
         if not keep:
             self.factorisations += 1
             self._factored = J
+            self._pays = self.reuse
             if self._counted:
                 F = self.ksp.getPC().getFactorMatrix()
                 self._flops = F.getMumpsRinfog(3)
-            self._pays = self.reuse and (not self._counted or _payback(F) >= PAYBACK)
+                self._pays = _payback(F) >= PAYBACK
         self.krylov_iterations += self.ksp.getIterationNumber()
         reason = self.ksp.getConvergedReason()
         if reason == compat.ksp_pc_failed():
