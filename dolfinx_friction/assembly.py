@@ -15,6 +15,10 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 
+#: the attribute of a serial matrix that holds the array PETSc stores its values in
+_VALUES = "dolfinx_friction_values"
+
+
 def ownership_ends(comm: MPI.Comm, n_owned: int) -> np.ndarray:
     """Exclusive end of every rank's contiguous ownership range."""
     return np.cumsum(comm.allgather(n_owned)).astype(np.int64)
@@ -138,13 +142,25 @@ class CooPattern:
         return np.flatnonzero(mask[self._row_of_slot])
 
     def create_matrix(self, block_size: int = 1) -> PETSc.Mat:
+        """A matrix of this pattern, zero.  In serial PETSc stores its values in an array
+        of ours (:meth:`fill` writes them in place); under MPI it copies them."""
         size = ((self.n_owned, self.n_global), (self.n_owned, self.n_global))
-        A = PETSc.Mat().createAIJ(size, bsize=block_size, csr=(self.indptr, self.indices),
-                                  comm=self.comm)
+        if self.comm.size == 1:
+            csr = (self.indptr, self.indices, np.zeros(self.nnz, dtype=PETSc.ScalarType))
+            A = PETSc.Mat().createAIJWithArrays(size, csr, comm=self.comm)
+            A.setBlockSize(block_size)
+            A.setAttr(_VALUES, csr[2])
+        else:
+            A = PETSc.Mat().createAIJ(size, bsize=block_size, csr=(self.indptr, self.indices),
+                                      comm=self.comm)
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
         return A
 
     def fill(self, A: PETSc.Mat, data: np.ndarray) -> None:
         """Overwrite all values of ``A`` (created by :meth:`create_matrix`) with CSR ``data``."""
-        A.setValuesCSR(self.indptr, self.indices, data)
-        A.assemble()
+        values = A.getAttr(_VALUES)
+        if values is None:
+            A.setValuesCSR(self.indptr, self.indices, data)
+        else:
+            values[:] = data
+        A.assemble()  # also tells PETSc the values changed (a factorisation is redone)

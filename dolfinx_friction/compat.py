@@ -96,7 +96,10 @@ def create_mesh(comm, cells: np.ndarray, x: np.ndarray, domain) -> dolfinx.mesh.
         # mode is a property of the partitioner.
         partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.none)
         return dolfinx.mesh.create_mesh(comm, cells, x, domain, partitioner)
-    # 0.5: create_mesh(comm, cells, x, domain, ghost_mode, partitioner)
+    # 0.5: create_mesh(comm, cells, x, domain, ghost_mode, partitioner); cells as an
+    # AdjacencyList (a bare array is first tried against it, and the TypeError's message
+    # formats both arrays)
+    cells = dolfinx.cpp.graph.AdjacencyList_int64(cells)
     return dolfinx.mesh.create_mesh(comm, cells, x, domain, ghost_mode=dolfinx.mesh.GhostMode.none)
 
 

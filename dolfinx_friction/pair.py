@@ -299,6 +299,8 @@ class NodeToSurface:
         self._iteration = 0
         self._u_slaves = np.zeros((len(slaves.nodes), self.gdim))
         self._bc_cache: tuple = ((), np.zeros(0, np.int64))
+        self._dof_cache: tuple = (None,)  # (candidates, their dofs)
+        self._slot_cache: tuple = (None,)  # (candidates, rows, cols, slot)
         #: changes whenever the candidate couplings (the matrix pattern) change
         self.couplings_version = 0
         #: counts the evaluations of the elements (an update that pairs the same elements
@@ -502,12 +504,41 @@ class NodeToSurface:
 
     def _dofs(self) -> np.ndarray:
         """(n_candidates, nodes * gdim) global dofs of the candidate elements, -1 for the
-        nodes of a rigid obstacle (no dofs)."""
-        nodes = self._interaction.candidates.nodes
-        d = self.gdim
-        dofs = (nodes[:, :, None] * d + np.arange(d)).reshape(len(nodes), nodes.shape[1] * d)
-        dofs[np.repeat(nodes < 0, d, axis=1)] = -1
-        return dofs
+        nodes of a rigid obstacle (no dofs); made once per search, read-only."""
+        candidates = self._interaction.candidates
+        if self._dof_cache[0] is not candidates:
+            nodes, d = candidates.nodes, self.gdim
+            dofs = (nodes[:, :, None] * d + np.arange(d)).reshape(len(nodes), nodes.shape[1] * d)
+            dofs[np.repeat(nodes < 0, d, axis=1)] = -1
+            dofs.flags.writeable = False
+            self._dof_cache = (candidates, dofs)
+        return self._dof_cache[1]
+
+    def _coupling_slots(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The distinct couplings of the candidate elements, made once per search: their
+        global ``rows`` and ``cols`` (m,), and ``slot`` (n_candidates, nd, nd), the index
+        among them of each entry of each candidate's tangent (-1 where a rigid obstacle's
+        node has no dofs).  Found among node pairs (gdim^2 fewer than dof pairs)."""
+        candidates = self._interaction.candidates
+        if self._slot_cache[0] is not candidates:
+            nodes, d = candidates.nodes, self.gdim
+            n, k = nodes.shape
+            a = np.broadcast_to(nodes[:, :, None], (n, k, k))
+            b = np.broadcast_to(nodes[:, None, :], (n, k, k))
+            valid = (a >= 0) & (b >= 0)
+            width = int(nodes.max(initial=0)) + 1
+            pairs, inverse = np.unique(a[valid] * width + b[valid], return_inverse=True)
+            pair = np.full((n, k, k), -1, dtype=np.int64)
+            pair[valid] = inverse
+            i = np.arange(d)
+            # entry (node alpha, component i; node beta, component j) of a candidate's tangent
+            slot = (pair[:, :, None, :, None] * d * d + i[:, None, None] * d + i).reshape(
+                n, k * d, k * d)
+            slot[np.repeat(np.repeat(pair < 0, d, axis=1), d, axis=2)] = -1
+            rows = ((pairs // width)[:, None, None] * d + i[:, None]).repeat(d, axis=2)
+            cols = ((pairs % width)[:, None, None] * d + i).repeat(d, axis=1)
+            self._slot_cache = (candidates, rows.ravel(), cols.ravel(), slot)
+        return self._slot_cache[1:]
 
     def _bc_dofs(self, bcs: Sequence) -> np.ndarray:
         """Sorted global dofs of the Dirichlet conditions ``bcs`` (all ranks; collective)."""
@@ -528,11 +559,12 @@ class NodeToSurface:
         return dofs
 
     def _masked_dofs(self, bcs: Sequence) -> np.ndarray:
+        """:meth:`_dofs` with -1 also for the dofs of ``bcs`` (read-only without them)."""
         dofs = self._dofs()
         fixed = self._bc_dofs(bcs)
         if len(fixed):
             at = np.searchsorted(fixed, dofs).clip(max=len(fixed) - 1)
-            dofs[fixed[at] == dofs] = -1
+            dofs = np.where(fixed[at] == dofs, -1, dofs)
         return dofs
 
     def _element_rows(self) -> np.ndarray:
@@ -578,27 +610,20 @@ class NodeToSurface:
 
     def couplings(self) -> tuple[np.ndarray, np.ndarray]:
         """Global ``(rows, cols)`` of every entry the contact tangent may fill until the
-        next search (each candidate element's dofs, all against all)."""
-        dofs = self._dofs()
-        keep = dofs >= 0
-        n, nd = dofs.shape
-        rows = np.repeat(dofs, nd, axis=1).reshape(n, nd, nd)
-        cols = np.tile(dofs, (1, nd)).reshape(n, nd, nd)
-        both = keep[:, :, None] & keep[:, None, :]
-        return rows[both], cols[both]
+        next search (each candidate element's dofs, all against all), each once."""
+        rows, cols, _ = self._coupling_slots()
+        return rows, cols
 
     def coupling_values(self, bcs: Sequence = ()) -> np.ndarray:
-        """Tangent values in the order of :meth:`couplings` (0 where a candidate is not an
-        element, and in the rows and columns of ``bcs``)."""
+        """Tangent values in the order of :meth:`couplings`: the sum of the elements'
+        entries (0 where no element couples, and in the rows and columns of ``bcs``)."""
         el = self._evaluated()
-        dofs = self._dofs()
-        n, nd = dofs.shape
-        K = np.zeros((n, nd, nd))
-        K[el.candidate] = el.result.K.reshape(-1, nd, nd)
-        masked = self._masked_dofs(bcs) < 0
-        K[masked[:, :, None] | masked[:, None, :]] = 0.0
-        keep = dofs >= 0
-        return K[keep[:, :, None] & keep[:, None, :]]
+        rows, _, slot = self._coupling_slots()
+        slot = slot[el.candidate]
+        K = el.result.K.reshape(slot.shape)
+        masked = self._masked_dofs(bcs)[el.candidate] < 0
+        keep = (slot >= 0) & ~(masked[:, :, None] | masked[:, None, :])
+        return np.bincount(slot[keep], weights=K[keep], minlength=len(rows))
 
     def element_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Global ``(rows, cols, values)`` of the current elements' tangents only (what
