@@ -26,10 +26,12 @@ identity), as the preconditioner of Richardson iterations on ``J`` (applied as
 ``K v + C v``, never assembled) until the true residual is below 1e-10 ``|b|`` (one
 iteration on the Hertz benchmark; reactions as with LU to 1e-12).  It is used while its
 flops so far (columns of ``G``, back-solves, dense solves; MUMPS's counts) stay below
-those of the factorisations it replaced plus :data:`INVESTMENT` factorisations, else the
-path above is taken.  What a factorisation of ``J`` costs is MUMPS's count of the last one
-(``J`` has ``K``'s fill and the contact's: measured 2.4-2.6x ``K``'s flops on the small
-scenes), ``K``'s until ``J`` was factorised once.  Serial only: under MPI the path above.
+those of the solves it replaced plus :data:`INVESTMENT` of them, else the path above is
+taken.  What a solve by that path costs is its flops per solve so far (factorisations,
+and back-solves with a kept one: a block of 16k dofs whose kept factorisation needs 13
+GMRES iterations per Jacobian costs a third of a factorisation per solve, and 1,000
+columns of ``G`` would not pay back there), ``K``'s factorisation before it solved once.
+Serial only: under MPI the path above.
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
 default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
 LU factorisation is kept (``reuse`` is ignored for other preconditioners); one by a
@@ -78,6 +80,10 @@ class LinearSolver:
         self._paused = 0  # Jacobians still to factorise afresh
         self._pays = False  # the last factorisation is worth keeping
         self._flops = 0.0  # MUMPS's flops of the last factorisation (0: not counted)
+        self._solve_flops = 0.0  # of one back-solve with it (4 x its factor entries)
+        #: flops and solves of this path so far (factorisations, back-solves), the cost
+        #: per solve the condensed path is measured against
+        self._spent, self._solves = 0.0, 0
         self.factorisations = 0
         self.krylov_iterations = 0
         #: why the last solve failed ("" if it did not)
@@ -105,7 +111,8 @@ class LinearSolver:
             return None
         if self._condensed is None:
             self._condensed = Condensed(b.getComm(), self.ksp.getOptionsPrefix())
-        if not self._condensed.solve(split, b, x, self._flops):
+        per_solve = self._spent / self._solves if self._solves else 0.0
+        if not self._condensed.solve(split, b, x, per_solve):
             return None
         self.condensed_solves += 1
         return True
@@ -135,9 +142,12 @@ class LinearSolver:
             self._pays = self.reuse
             if self._counted:
                 F = self.ksp.getPC().getFactorMatrix()
-                self._flops = F.getMumpsRinfog(3)
-                self._pays = _payback(F) >= PAYBACK
+                self._flops, self._solve_flops = F.getMumpsRinfog(3), 4.0 * _entries(F)
+                self._pays = self._flops >= PAYBACK * self._solve_flops
+                self._spent += self._flops
         self.krylov_iterations += self.ksp.getIterationNumber()
+        self._spent += max(self.ksp.getIterationNumber(), 1) * self._solve_flops
+        self._solves += 1
         reason = self.ksp.getConvergedReason()
         if reason == compat.ksp_pc_failed():
             self.failure = "singular Jacobian (the factorisation met a zero pivot)"
@@ -155,15 +165,14 @@ class LinearSolver:
         return reason > 0 and not self.failure
 
 
-def _payback(F: PETSc.Mat) -> float:
-    """Cost of a MUMPS factorisation in back-solves: flops over 4 x factor entries."""
+def _entries(F: PETSc.Mat) -> float:
+    """Entries of a MUMPS factorisation (at least 1)."""
     entries = F.getMumpsInfog(20)  # negative: millions
-    entries = entries if entries >= 0 else -entries * 1e6
-    return F.getMumpsRinfog(3) / (4.0 * max(entries, 1))
+    return max(entries if entries >= 0 else -entries * 1e6, 1.0)
 
 
-#: The condensed path may spend at most this many factorisations' flops more than the
-#: factorisations it replaced (the columns of ``G`` are paid before they pay back).
+#: The condensed path may spend at most this many solves' flops more than the solves it
+#: replaced (the columns of ``G`` are paid before they pay back).
 INVESTMENT = 4
 #: Columns of ``K^-1`` computed per back-solve call (dense right-hand sides).
 COLUMNS_PER_SOLVE = 64
@@ -266,7 +275,7 @@ class Condensed:
     def solve(self, split, b: PETSc.Vec, x: PETSc.Vec, replaced: float = 0.0) -> bool:
         """Solve with the kept bulk factorisation; False (``x`` undefined) when this path
         does not pay here or did not converge: the caller solves another way.  ``replaced``:
-        the flops of a factorisation of the whole Jacobian (0: unknown, ``K``'s count)."""
+        the flops of a solve by the other path (0: unknown, a factorisation of ``K``)."""
         if split.bulk is not self._K:
             self._regular = self._factorise(split.bulk)
         if not self._regular:  # e.g. a body held by the contact alone: K is singular
@@ -280,7 +289,7 @@ class Condensed:
             return False  # a coupling off the surfaces: not the split assumed
         new = where[~self._known[where]]
         flops = (len(new) + 8) * self._solve_flops + 2.0 / 3.0 * len(active) ** 3
-        if self._spent + flops > max(self._flops, replaced) * (self.solves + 1 + INVESTMENT):
+        if self._spent + flops > (replaced or self._flops) * (self.solves + 1 + INVESTMENT):
             return False
         self._spent += flops
         if len(new):
