@@ -43,7 +43,7 @@ def show(inc):
     print(f"t = {inc.t:.4f}: residuals {' '.join(f'{x:.1e}' for x in r[:6])}"
           f"{' ...' if len(r) > 6 else ''} (tolerances ask "
           f"{max(step.newton_rtol * r[0], step.newton_atol):.1e}, round-off floor "
-          f"{problem.system.floor:.1e})")
+          f"{problem.system.roundoff_floor():.1e})")
 
 
 try:
