@@ -175,6 +175,28 @@ def test_newton_converges_quadratically():
     assert order >= 1.8
 
 
+def test_update_at_the_same_iterate_keeps_its_evaluation():
+    """An update that pairs the same elements at the iterate last evaluated keeps that
+    evaluation (Newton then keeps the residual too); a new iterate, or a new increment,
+    is evaluated, and the kept evaluation is the one a fresh update would give."""
+    problem, contact = on_plane()
+    press_and_slide(problem, contact, slide=0.01, increments=(2, 1))
+    contact.begin(problem.x)
+    contact.update(problem.x)
+    first, force = contact.evaluations, contact.force()
+    contact.update(problem.x, pairing=False)
+    contact.update(problem.x)
+    assert contact.evaluations == first and np.array_equal(contact.force(), force)
+    problem.x.shift(1e-9)
+    contact.update(problem.x)
+    assert contact.evaluations == first + 1
+    problem.x.shift(-1e-9)
+    contact.begin(problem.x)  # a new increment: evaluated anew, to the same forces
+    contact.update(problem.x)
+    assert contact.evaluations == first + 2
+    np.testing.assert_allclose(contact.force(), force, rtol=1e-12, atol=0.0)
+
+
 def test_snes_matches_newton():
     answers = []
     for use_snes in (False, True):
