@@ -214,13 +214,18 @@ def kind_cases(kind: str, quick: bool) -> list[Case]:
     raise SystemExit(f"--kinds: unknown kind {kind!r} ({', '.join(KINDS)})")
 
 
+def common_times(row: dict, result) -> list[tuple[dict, object]]:
+    """``(reactions of row, increment of result)`` at the pseudo-times both runs reached
+    (either may have cut back)."""
+    mine = {round(t, 9): r for t, r in zip(row["times"], row["reactions"])}
+    return [(mine[round(i.t, 9)], i) for i in result.increments if round(i.t, 9) in mine]
+
+
 def twin_rel(row: dict, flat, group: str, thickness: float) -> float:
     """Worst ``|R_3D - thickness R_2D| / |R_3D|`` of ``group`` (in-plane components) over
-    the pseudo-times both runs reached (either may have cut back)."""
-    twin = {round(t, 9): np.asarray(r[group][:2]) for t, r in zip(row["times"],
-                                                                   row["reactions"])}
-    pairs = [(twin[round(i.t, 9)], thickness * np.asarray(i.reactions[group]))
-             for i in flat.increments if round(i.t, 9) in twin]
+    the pseudo-times both runs reached."""
+    pairs = [(np.asarray(r[group][:2]), thickness * np.asarray(i.reactions[group]))
+             for r, i in common_times(row, flat)]
     return max(float(np.linalg.norm(a - b) / np.linalg.norm(a)) for a, b in pairs)
 
 
@@ -267,14 +272,9 @@ def settling(scene):
 def strict_rel(row: dict, result, groups) -> float:
     """Worst ``|R - R_strict| / |R_strict|`` (largest component) of ``groups`` over the
     pseudo-times both runs reached: the reactions test against the strict one."""
-    strict = {round(t, 9): r for t, r in zip(row["times"], row["reactions"])}
-    worst = 0.0
-    for inc in result.increments:
-        ref = strict.get(round(inc.t, 9))
-        for g in groups if ref is not None else ():
-            R = np.asarray(ref[g])
-            worst = max(worst, float(np.abs(inc.reactions[g] - R).max() / np.abs(R).max()))
-    return worst
+    return max((float(np.abs(inc.reactions[g] - np.asarray(ref[g])).max()
+                      / np.abs(ref[g]).max())
+                for ref, inc in common_times(row, result) for g in groups), default=0.0)
 
 
 def _series(ax, rows, point, fmt: str, color: str, label: str, hollow: bool) -> None:

@@ -79,8 +79,7 @@ class LinearSolver:
         self._factored: Optional[PETSc.Mat] = None
         self._paused = 0  # Jacobians still to factorise afresh
         self._pays = False  # the last factorisation is worth keeping
-        self._flops = 0.0  # MUMPS's flops of the last factorisation (0: not counted)
-        self._solve_flops = 0.0  # of one back-solve with it (4 x its factor entries)
+        self._solve_flops = 0.0  # of one back-solve with the last factorisation
         #: flops and solves of this path so far (factorisations, back-solves), the cost
         #: per solve the condensed path is measured against
         self._spent, self._solves = 0.0, 0
@@ -142,9 +141,9 @@ class LinearSolver:
             self._pays = self.reuse
             if self._counted:
                 F = self.ksp.getPC().getFactorMatrix()
-                self._flops, self._solve_flops = F.getMumpsRinfog(3), 4.0 * _entries(F)
-                self._pays = self._flops >= PAYBACK * self._solve_flops
-                self._spent += self._flops
+                flops, self._solve_flops = F.getMumpsRinfog(3), 4.0 * _entries(F)
+                self._pays = flops >= PAYBACK * self._solve_flops
+                self._spent += flops
         self.krylov_iterations += self.ksp.getIterationNumber()
         self._spent += max(self.ksp.getIterationNumber(), 1) * self._solve_flops
         self._solves += 1
@@ -227,8 +226,7 @@ class Condensed:
         F = self.bulk.getPC().getFactorMatrix()
         if F.getMumpsInfog(1) < 0:
             return False
-        entries = F.getMumpsInfog(20)
-        entries = entries if entries >= 0 else -entries * 1e6
+        entries = _entries(F)
         self._flops, self._solve_flops = F.getMumpsRinfog(3), 4.0 * entries
         self._entries = entries  # whole columns of K^-1 are kept while they fit
         self._J = None  # the operator K + C

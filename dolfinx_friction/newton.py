@@ -28,13 +28,15 @@ class NewtonTrace:
     """One Newton solve: ``residuals[k]`` is the residual norm at iterate k; in iteration
     k + 1, ``status_changes[k]`` slave nodes changed their contact status (open, stick,
     slip), ``face_changes[k]`` others only their master face, and the line search halved
-    the step ``backtracks[k]`` times; ``reason``: why it stopped unconverged, where known
-    (a singular Jacobian)."""
+    the step ``backtracks[k]`` times, its correction was ``corrections[k]`` (max norm) and
+    (*: with ``convergence="reactions"`` only) the reactions changed by
+    ``reaction_changes[k]``; ``reason``: why it stopped unconverged, where known (a
+    singular Jacobian)."""
 
     converged: bool = False
     residuals: list[float] = field(default_factory=list)
-    corrections: list[float] = field(default_factory=list)  # max |dx| of iteration k + 1
-    reaction_changes: list[float] = field(default_factory=list)  # max |R_k+1 - R_k|
+    corrections: list[float] = field(default_factory=list)
+    reaction_changes: list[float] = field(default_factory=list)
     status_changes: list[int] = field(default_factory=list)
     face_changes: list[int] = field(default_factory=list)
     backtracks: list[int] = field(default_factory=list)
@@ -97,7 +99,8 @@ class Newton:
         displacement test of ``convergence="reactions"``."""
         x, b = problem.x, problem.b
         dx = x.duplicate()
-        x_n = x.copy() if start is None else start
+        settling = self.convergence == "reactions"
+        x_n = (x.copy() if start is None else start) if settling else None
         trace = NewtonTrace()
         before, reactions, floor, evaluated = None, None, 0.0, None
         for it in range(self.max_iterations + 1):
@@ -109,12 +112,12 @@ class Newton:
             before = now
             if not np.isfinite(norm):
                 break
-            reactions = self._reactions(problem, reactions, trace)
+            if settling:
+                reactions = self._reactions(problem, reactions, trace)
             target = max(self.rtol * trace.residuals[0], self.atol)
             floor = _floor_if_near(problem, norm, target, floor, it == 0)
             if norm <= max(target, floor) or (
-                    self.convergence == "reactions"
-                    and settled(trace, problem, x, x_n, reactions, self.reaction_tol)):
+                    settling and settled(trace, problem, x, x_n, reactions, self.reaction_tol)):
                 trace.converged = True
                 break
             if it == self.max_iterations:
@@ -137,7 +140,7 @@ class Newton:
                                    if self.line_search else (0, None))
             trace.backtracks.append(halvings)
         dx.destroy()
-        if start is None:
+        if settling and start is None:
             x_n.destroy()
         problem.scatter()
         return trace

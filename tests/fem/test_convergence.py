@@ -2,9 +2,9 @@
 
 "reactions" also stops when the reactions and displacements no longer change (the
 residual below ``reaction_tol`` of the force scale, the corrections contracting, no
-contact change, the whole step taken).  It must give the strict test's reactions (the
-issue's bar: within 1e-6 relative in every increment; measured 1.6e-12 .. 2.2e-9) in fewer
-iterations, serially and under ``mpirun -n 2``.
+contact change, the whole step taken).  It must give the strict test's reactions in
+fewer iterations, serially and under ``mpirun -n 2`` (the issue's bar is 1e-6 relative in
+every increment; measured 1.6e-12 .. 1.7e-9, asserted 1e-8).
 """
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ def test_reactions_test_gives_the_strict_reactions_in_fewer_iterations(name, ste
     for a, b in zip(strict, loose):
         for group, R in a.reactions.items():
             worst = max(worst, np.abs(b.reactions[group] - R).max() / np.abs(R).max())
-    assert worst < 1e-6
+    assert worst < 1e-8
     assert all(b.iterations <= a.iterations for a, b in zip(strict, loose))
     assert sum(b.iterations for b in loose) < sum(a.iterations for a in strict)
 
