@@ -28,10 +28,10 @@ class NewtonTrace:
     """One Newton solve: ``residuals[k]`` is the residual norm at iterate k; in iteration
     k + 1, ``status_changes[k]`` slave nodes changed their contact status (open, stick,
     slip), ``face_changes[k]`` others only their master face, and the line search halved
-    the step ``backtracks[k]`` times, its correction was ``corrections[k]`` (max norm) and
-    (*: with ``convergence="reactions"`` only) the reactions changed by
-    ``reaction_changes[k]``; ``reason``: why it stopped unconverged, where known (a
-    singular Jacobian)."""
+    the step ``backtracks[k]`` times, its correction was ``corrections[k]`` (max norm)
+    and the reactions changed by ``reaction_changes[k]`` (recorded with
+    ``convergence="reactions"`` only); ``reason``: why it stopped unconverged, where known
+    (a singular Jacobian)."""
 
     converged: bool = False
     residuals: list[float] = field(default_factory=list)
