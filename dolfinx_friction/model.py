@@ -33,6 +33,11 @@ SHAPES = ("plane", "sphere", "cylinder")
 TANGENTS = ("consistent", "calculix")
 #: Newton's convergence tests (:mod:`dolfinx_friction.newton`)
 CONVERGENCE = ("residual", "reactions")
+#: Newton gives up on an increment (it is cut back) after this many iterations without a
+#: new lowest residual (counted from the first step's): contact statuses cycling at the
+#: edge of a growing zone converge faster in halved increments (benchmarks/RESULTS.md;
+#: in converging solves off that kind the longest such run is 2)
+STALL_ITERATIONS = 6
 
 #: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
 #: h: its node spacing, see :meth:`ContactPair.resolved`), from the stability maps
@@ -187,6 +192,7 @@ class Step:
     newton_rtol: float = 1e-9
     newton_atol: float = 1e-10
     max_iterations: int = 30
+    stall_iterations: int = STALL_ITERATIONS  # 0: never give up before max_iterations
     line_search: bool = True
     convergence: str = "residual"  # or "reactions": also stop once they no longer change
     reaction_tol: float = 1e-5
@@ -296,6 +302,7 @@ RULES: dict[type, Rules] = {
         "newton_rtol": Key(v.number(gt=0)),
         "newton_atol": Key(v.number(gt=0)),
         "max_iterations": Key(v.integer(1, 10_000)),
+        "stall_iterations": Key(v.integer(0, 10_000)),
         "line_search": Key(v.boolean),
         "convergence": Key(v.one_of(*CONVERGENCE)),
         "reaction_tol": Key(v.number(gt=0, lt=1)),

@@ -19,7 +19,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction.linear import LinearSolver
-from dolfinx_friction.model import CONVERGENCE
+from dolfinx_friction.model import CONVERGENCE, STALL_ITERATIONS
 from dolfinx_friction.system import BlockProblem
 
 
@@ -54,20 +54,24 @@ class Newton:
     factorisation kept as GMRES preconditioner where only contact changes the Jacobian:
     see :mod:`dolfinx_friction.linear`).  ``convergence``: ``"residual"`` (the residual
     norm test alone) or ``"reactions"`` (that test, or the reactions and displacements
-    settled to ``reaction_tol``: :func:`settled`).
+    settled to ``reaction_tol``: :func:`settled`).  ``stall``: give up after that many
+    iterations without a new lowest residual (0: never; default
+    :data:`~dolfinx_friction.model.STALL_ITERATIONS`).
     """
 
     def __init__(self, rtol: float = 1e-9, atol: float = 1e-10, max_iterations: int = 30,
                  line_search: bool = True, prefix: str = "dolfinx_friction_",
                  petsc_options: Optional[dict] = None,
                  reuse_factorisation: Optional[bool] = None,
-                 convergence: str = "residual", reaction_tol: float = 1e-5):
+                 convergence: str = "residual", reaction_tol: float = 1e-5,
+                 stall: int = STALL_ITERATIONS):
         if convergence not in CONVERGENCE:
             raise ValueError(f"convergence = {convergence!r}: must be one of "
                              f"{', '.join(map(repr, CONVERGENCE))}")
         self.convergence, self.reaction_tol = convergence, reaction_tol
         self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
         self.line_search = line_search
+        self.stall = stall
         self.prefix, self.petsc_options = prefix, petsc_options
         self.reuse_factorisation = reuse_factorisation
         self.linear: Optional[LinearSolver] = None
@@ -93,16 +97,20 @@ class Newton:
             return last
         return problem.residual(problem.x, problem.b)
 
-    def solve(self, problem: BlockProblem, start: Optional[PETSc.Vec] = None) -> NewtonTrace:
+    def solve(self, problem: BlockProblem, start: Optional[PETSc.Vec] = None,
+              may_stall: bool = True) -> NewtonTrace:
         """Iterate from :attr:`BlockProblem.x` to convergence; ``start``: the converged
         state the increment starts from (default: ``x`` on entry), the scale of the
-        displacement test of ``convergence="reactions"``."""
+        displacement test of ``convergence="reactions"``; ``may_stall``: give up after
+        :attr:`stall` iterations without a new lowest residual (False where no cutback is
+        left: then only ``max_iterations`` stops it)."""
         x, b = problem.x, problem.b
         dx = x.duplicate()
         settling = self.convergence == "reactions"
         x_n = (x.copy() if start is None else start) if settling else None
         trace = NewtonTrace()
         before, reactions, floor, evaluated = None, None, 0.0, None
+        best, best_at = np.inf, 1  # the lowest residual after the first step
         for it in range(self.max_iterations + 1):
             norm = self._evaluate(problem, True, evaluated)  # pairing at the accepted iterate
             trace.residuals.append(norm)
@@ -114,6 +122,8 @@ class Newton:
                 break
             if settling:
                 reactions = self._reactions(problem, reactions, trace)
+            if it and norm < best:
+                best, best_at = norm, it
             target = max(self.rtol * trace.residuals[0], self.atol)
             floor = _floor_if_near(problem, norm, target, floor, it == 0)
             if norm <= max(target, floor) or (
@@ -121,6 +131,9 @@ class Newton:
                 trace.converged = True
                 break
             if it == self.max_iterations:
+                break
+            if may_stall and 0 < self.stall <= it - best_at:
+                trace.reason = f"no new lowest residual in {self.stall} iterations"
                 break
             solver = self._solver(problem)
             split = problem.split() if solver.reuse else None

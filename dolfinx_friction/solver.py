@@ -280,6 +280,7 @@ class Solver:
             newton = self.newton
             newton.rtol, newton.atol = step.newton_rtol, step.newton_atol
             newton.max_iterations, newton.line_search = step.max_iterations, step.line_search
+            newton.stall = step.stall_iterations
             newton.convergence, newton.reaction_tol = step.convergence, step.reaction_tol
             done = [0]  # converged increments of this step
 

@@ -126,7 +126,7 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
         problem.apply_bcs()
         for c in problem.contacts:
             c.begin(x, start=x_n)
-        trace = newton.solve(problem, start=x_n)
+        trace = newton.solve(problem, start=x_n, may_stall=size.level < max_cutbacks)
         spent += trace.iterations
         ok, why = trace.converged, trace.reason
         if ok and not _finite(problem):
