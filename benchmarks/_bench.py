@@ -207,9 +207,8 @@ def release_petsc_garbage(comm=None) -> None:
 def clear_petsc_options(prefix: str = "dolfinx_friction_") -> None:
     """Forget the solver options an earlier run left in PETSc's global options database.
 
-    ``LinearSolver`` writes its defaults there only when the key is not set yet and never
-    removes them, so without this a second ``run()`` in one process inherits the first
-    run's linear solver (e.g. GMRES after ``reuse_factorisation=True``).
+    ``LinearSolver`` forgets its own defaults once read, but ``petsc_options`` given to a
+    run stay there, so without this a later ``run()`` in one process would inherit them.
     """
     from petsc4py import PETSc
     opts = PETSc.Options()

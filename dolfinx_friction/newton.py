@@ -81,7 +81,8 @@ class Newton:
             reuse = self.reuse_factorisation
             if reuse is None and self.petsc_options is None:
                 reuse = problem.linear  # a kept factorisation pays where only contact changes
-            self.linear = LinearSolver(problem.comm, self.prefix, reuse, self.petsc_options)
+            self.linear = LinearSolver(problem.comm, self.prefix, reuse, self.petsc_options,
+                                       symmetric=problem.symmetric)
         return self.linear
 
     @staticmethod
@@ -140,7 +141,7 @@ class Newton:
             with problem.timers.measure("linear_solve"):
                 solved = solver.solve_split(split, b, dx) if split is not None else None
             if solved is None:  # no split, or it did not pay: the whole Jacobian
-                A = problem.jacobian(x)
+                A = problem.jacobian(x, symmetric=solver.symmetric)
                 with problem.timers.measure("linear_solve"):
                     solved = solver.solve(A, b, dx)
             if not solved:

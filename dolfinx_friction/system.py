@@ -33,6 +33,9 @@ from dolfinx_friction.pair import ContactSetupError, NodeToSurface
 #: + the contact forces' sensitivity to the coordinates) are converged: Newton cannot
 #: reduce them further.
 ROUNDOFF_FLOOR = 2 * np.finfo(float).eps
+#: A body's stiffness is symmetric when no entry differs from its transpose's by more than
+#: this share of the largest row sum (compiled forms sum in another order: round-off)
+SYMMETRY_TOL = 1e-12
 
 
 @dataclass
@@ -63,13 +66,15 @@ class JacobianSplit:
     stiffness with the constrained rows made identity rows (a PETSc matrix, the same object
     while it does not change); ``C``, the contact tangent (zero in constrained rows), is the
     sum of the ``values`` at ``(rows, cols)`` (repeated pairs add), all within the contact
-    surfaces' ``dofs`` (sorted)."""
+    surfaces' ``dofs`` (sorted).  With ``symmetric`` (``K`` is), the constrained columns
+    are zero in both: ``J`` is ``jacobian(x, symmetric=True)``."""
 
     bulk: PETSc.Mat
     dofs: np.ndarray
     rows: np.ndarray
     cols: np.ndarray
     values: np.ndarray
+    symmetric: bool = False
 
 
 PHASES = ("setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
@@ -201,6 +206,7 @@ class BlockProblem:
         self._floor: Optional[float] = 0.0  # of the last residual; None: not computed yet
         self._floor_x = self.x  # the iterate of the last residual
         self._spring = 0.0
+        self._symmetric_bodies: Optional[bool] = None
         #: checks of an iterate (collective), each returning why it is inadmissible or None;
         #: the residual of an inadmissible iterate is infinite (Newton fails, and cuts back)
         self.guards: list = []
@@ -211,6 +217,21 @@ class BlockProblem:
     def linear(self) -> bool:
         """Whether every body is linear (only the contact changes the Jacobian)."""
         return all(b.linear for b in self.bodies)
+
+    @property
+    def symmetric(self) -> bool:
+        """Whether the Jacobian is symmetric once its constrained rows and columns are
+        eliminated (``jacobian(x, symmetric=True)``): every body linear with a symmetric
+        stiffness (checked once, to :data:`SYMMETRY_TOL`; collective) and every contact
+        frictionless (its force derives from a potential: contact-theory 7.4)."""
+        return self._bodies_symmetric() and all(c.mu == 0.0 for c in self.contacts)
+
+    def _bodies_symmetric(self) -> bool:
+        if self._symmetric_bodies is None:
+            self._symmetric_bodies = self.linear and all(
+                body.A.isSymmetric(SYMMETRY_TOL * body.A.norm(PETSc.NormType.NORM_INFINITY))
+                for body in self.bodies)
+        return self._symmetric_bodies
 
     # ------------------------------------------------------------ numbering
     def block_slice(self, k: int) -> slice:
@@ -385,9 +406,12 @@ class BlockProblem:
             self._bc_slots = None
         return self._J
 
-    def jacobian(self, x: PETSc.Vec, A: Optional[PETSc.Mat] = None) -> PETSc.Mat:
+    def jacobian(self, x: PETSc.Vec, A: Optional[PETSc.Mat] = None,
+                 symmetric: bool = False) -> PETSc.Mat:
         """Fill the Jacobian at ``x`` (the contacts at their last update) into ``A``
-        (default :meth:`matrix`); returns it."""
+        (default :meth:`matrix`); returns it.  ``symmetric``: the constrained columns are
+        zeroed too (symmetric where :attr:`symmetric`); a Newton step is the same, since the
+        residual is zero in the constrained rows."""
         with self.timers.measure("bulk_assembly"):
             A = self.matrix() if A is None else A
             if not self.linear:
@@ -406,7 +430,13 @@ class BlockProblem:
             free = self._pattern.diagonal_slots[self.free_obstacle_rows()]
             data[free] += self._rigid_spring(base)
             self._pattern.fill(A, data)
+            if symmetric:
+                A.zeroRowsColumns(self._global_rows(rows), diag=1.0)
         return A
+
+    def _global_rows(self, rows: np.ndarray) -> np.ndarray:
+        """Global indices of owned local rows."""
+        return (rows + self.x.getOwnershipRange()[0]).astype(PETSc.IntType)
 
     def _contact_values(self) -> np.ndarray:
         """CSR data (pattern of :meth:`matrix`) of the contacts' tangents, zero in the
@@ -439,6 +469,8 @@ class BlockProblem:
                 data[self._base.diagonal_slots[rows]] = 1.0
                 K = self._base.create_matrix(self.gdim)
                 self._base.fill(K, data)
+                if self._bodies_symmetric():
+                    K.zeroRowsColumns(self._global_rows(rows), diag=1.0)
                 self._bulk_bc = (rows, K)
         with self.timers.measure("contact_assembly"):
             free = np.ones(self.layout.n_owned * self.gdim, bool)
@@ -446,10 +478,13 @@ class BlockProblem:
             entries = [c.element_entries() for c in self.contacts]
             r, k, v = (np.concatenate(e) for e in zip(*entries))
             keep = (v != 0.0) & free[r]
+            if self._bodies_symmetric():  # the constrained columns eliminated, as in K
+                keep &= free[k]
             if self._surface_dofs is None:
                 self._surface_dofs = np.unique(np.concatenate(
                     [c.surface_dofs() for c in self.contacts]))
-        return JacobianSplit(self._bulk_bc[1], self._surface_dofs, r[keep], k[keep], v[keep])
+        return JacobianSplit(self._bulk_bc[1], self._surface_dofs, r[keep], k[keep], v[keep],
+                             self._bodies_symmetric())
 
     def _rigid_spring(self, base: np.ndarray) -> float:
         """1e-12 of the largest bulk diagonal entry (found once)."""

@@ -170,6 +170,33 @@ def test_condensed_solve_gives_the_direct_answer(shared_dir, mu):
     assert [i.iterations for i in condensed] == [i.iterations for i in direct]
 
 
+@pytest.mark.parametrize("mu", [0.0, 0.3])
+def test_frictionless_linear_jacobian_is_symmetric_and_factorised_ldlt(shared_dir, mu):
+    """Linear bodies: the Jacobian is symmetric iff the contact is frictionless
+    (contact-theory 7.4), once its constrained columns are eliminated like its rows; the
+    default solver then factorises LDL^T and reaches LU's reactions in LU's iterations.
+    A body that is not linear is never taken as symmetric."""
+    mesh = meshes.two_boxes(shared_dir / "boxes.msh")
+    scene = _boxes_scene(mesh, mu=mu)
+    ldlt, solver = _solve(scene)
+    lu, _ = _solve(scene, petsc_options={"pc_type": "lu"})
+    system = solver.system
+    assert system.symmetric == (mu == 0.0)
+    assert solver.linear.settings()["pc_type"] == ("cholesky" if mu == 0.0 else "lu")
+    J = system.jacobian(system.x, symmetric=True)
+    D = J.copy()
+    D.transpose()
+    D.axpy(-1.0, J)
+    asymmetry = D.norm(PETSc.NormType.INFINITY) / J.norm(PETSc.NormType.INFINITY)
+    assert asymmetry < 1e-14 if mu == 0.0 else asymmetry > 1e-6  # measured: 6.6e-16 / 0.28
+    for a, b in zip(ldlt, lu):
+        for group in b.reactions:
+            R = np.abs(b.reactions[group]).max()
+            np.testing.assert_allclose(a.reactions[group], b.reactions[group], atol=1e-10 * R)
+    assert [i.iterations for i in ldlt] == [i.iterations for i in lu]
+    assert not ContactProblem(_boxes_scene(mesh, "neo-hookean", mu=0.0)).system.symmetric
+
+
 def test_condensed_solve_falls_back_when_the_bulk_is_singular(shared_dir):
     """A block held by the contact alone (pressure on its top): its bulk stiffness is
     singular, the condensed path does not converge and the factorisation path answers,
@@ -192,13 +219,14 @@ def test_condensed_solve_falls_back_when_the_bulk_is_singular(shared_dir):
 
 def test_jacobian_splits_into_bulk_and_contact(shared_dir):
     """``split()``: the last Jacobian is exactly the bulk matrix (constrained rows made
-    identity) plus the contact entries, all within the contact surfaces' dofs."""
+    identity; linear bodies: the columns too, in both) plus the contact entries, all within
+    the contact surfaces' dofs."""
     mesh = meshes.two_boxes(shared_dir / "boxes.msh")
     _, solver = _solve(_boxes_scene(mesh, mu=0.3), MPI.COMM_SELF)
     system = solver.system
-    J = system.jacobian(system.x)
     split = system.split()
-    assert split is not None and len(split.values) > 0
+    assert split is not None and len(split.values) > 0 and split.symmetric
+    J = system.jacobian(system.x, symmetric=True)
     assert np.isin(split.rows, split.dofs).all() and np.isin(split.cols, split.dofs).all()
     D = J.copy()
     D.axpy(-1.0, split.bulk, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
