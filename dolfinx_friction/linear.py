@@ -42,11 +42,13 @@ bodies, friction or not).  Their counts are doubled to LU's for every decision a
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
 default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
 LU or LDL^T factorisation is kept (``reuse`` is ignored for other preconditioners); one by
-a solver other than MUMPS is kept whatever it cost.  The defaults are written to PETSc's
-options database under ``prefix`` only while the solver reads them.
+a solver other than MUMPS is kept whatever it cost.  Options go through PETSc's options
+database under ``prefix`` (the command line's win): the defaults only while the solver
+reads them, the given ``options`` while the solver lives.
 """
 from __future__ import annotations
 
+import weakref
 from typing import Optional
 
 import numpy as np
@@ -73,19 +75,15 @@ class LinearSolver:
                  options: Optional[dict] = None, max_krylov: int = 20, symmetric: bool = False):
         if reuse is None:
             reuse = options is None
-        opts = PETSc.Options()
         defaults = {**(REUSE if reuse else DIRECT),
                     **({"pc_type": "cholesky"} if symmetric and options is None else {})}
-        written = []  # the defaults, forgotten once read (the next solver may differ)
-        for key, value in {**defaults, **(options or {})}.items():
-            if not opts.hasName(prefix + key):
-                opts[prefix + key] = value
-                written += [prefix + key] if key in defaults and key not in (options or {}) else []
+        written = write_options(prefix, defaults)
+        # the given options stay while this solver may factorise (MUMPS reads its own then)
+        weakref.finalize(self, forget_options, write_options(prefix, options or {})).atexit = False
         self.ksp = PETSc.KSP().create(comm)
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setFromOptions()
-        for key in written:
-            opts.delValue(key)
+        forget_options(written)
         pc = self.ksp.getPC()
         #: the Jacobians must be symmetric (:meth:`BlockProblem.jacobian` with ``symmetric``)
         self.symmetric = pc.getType() in ("cholesky", "icc")
@@ -179,6 +177,25 @@ class LinearSolver:
         elif reason <= 0:
             self.failure = f"the linear solver failed ({reason})"
         return reason > 0 and not self.failure
+
+
+def write_options(prefix: str, options: dict) -> list[str]:
+    """Write ``options`` into PETSc's options database under ``prefix`` where it does not
+    have them yet (the command line wins); returns the names written."""
+    opts, written = PETSc.Options(), []
+    for key, value in options.items():
+        if not opts.hasName(prefix + key):
+            opts[prefix + key] = value
+            written.append(prefix + key)
+    return written
+
+
+def forget_options(names: list[str]) -> None:
+    """Remove options that :func:`write_options` wrote: a later solver in the process
+    must not inherit them."""
+    opts = PETSc.Options()
+    for name in names:
+        opts.delValue(name)
 
 
 def _entries(F: PETSc.Mat) -> float:

@@ -18,7 +18,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from dolfinx_friction.linear import LinearSolver
+from dolfinx_friction.linear import LinearSolver, forget_options, write_options
 from dolfinx_friction.model import CONVERGENCE, STALL_ITERATIONS
 from dolfinx_friction.system import BlockProblem
 
@@ -54,8 +54,8 @@ class Newton:
     factorisation kept as GMRES preconditioner where only contact changes the Jacobian:
     see :mod:`dolfinx_friction.linear`).  ``convergence``: ``"residual"`` (the residual
     norm test alone) or ``"reactions"`` (that test, or the reactions and displacements
-    settled to ``reaction_tol``: :func:`settled`).  ``stall``: give up after that many
-    iterations without a new lowest residual (0: never; default
+    settled to ``reaction_tol``: :func:`settled`).  ``stall``: with ``solve(may_stall=True)``,
+    give up after that many iterations without a new lowest residual (0: never; default
     :data:`~dolfinx_friction.model.STALL_ITERATIONS`).
     """
 
@@ -99,12 +99,13 @@ class Newton:
         return problem.residual(problem.x, problem.b)
 
     def solve(self, problem: BlockProblem, start: Optional[PETSc.Vec] = None,
-              may_stall: bool = True) -> NewtonTrace:
+              may_stall: bool = False) -> NewtonTrace:
         """Iterate from :attr:`BlockProblem.x` to convergence; ``start``: the converged
         state the increment starts from (default: ``x`` on entry), the scale of the
         displacement test of ``convergence="reactions"``; ``may_stall``: give up after
-        :attr:`stall` iterations without a new lowest residual (False where no cutback is
-        left: then only ``max_iterations`` stops it)."""
+        :attr:`stall` iterations without a new lowest residual (where the caller can cut
+        back: :func:`~dolfinx_friction.stepping.solve_steps` while cutbacks are left;
+        else only ``max_iterations`` stops it)."""
         x, b = problem.x, problem.b
         dx = x.duplicate()
         settling = self.convergence == "reactions"
@@ -252,13 +253,10 @@ def snes_solve(problem: BlockProblem, prefix: str = "dolfinx_friction_snes_",
     begun; they are paired at every residual evaluation, without a new search (the
     couplings stay those of :meth:`BlockProblem.matrix`).  Returns SNES's converged
     reason (> 0: converged)."""
-    opts = PETSc.Options()
     defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "ksp_type": "preonly",
                 "pc_type": "lu", "pc_factor_mat_solver_type": "mumps", "snes_rtol": 1e-9,
                 "snes_atol": 1e-10}
-    for key, value in {**defaults, **(options or {})}.items():
-        if not opts.hasName(prefix + key):
-            opts[prefix + key] = value
+    written = write_options(prefix, {**defaults, **(options or {})})
     snes = PETSc.SNES().create(problem.comm)
     snes.setOptionsPrefix(prefix)
 
@@ -274,7 +272,10 @@ def snes_solve(problem: BlockProblem, prefix: str = "dolfinx_friction_snes_",
     snes.setFunction(residual, problem.b.duplicate())
     snes.setJacobian(jacobian, A, A)
     snes.setFromOptions()
-    snes.solve(None, problem.x)
+    try:
+        snes.solve(None, problem.x)
+    finally:
+        forget_options(written)
     reason = snes.getConvergedReason()
     snes.destroy()
     problem.scatter()

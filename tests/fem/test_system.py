@@ -124,7 +124,7 @@ def test_rigid_body_modes_span_the_kernel_of_the_bulk_stiffness(shared_dir):
 def test_iterative_solver_gives_the_direct_answer(shared_dir):
     """GMRES + GAMG (near null space and block size from the solver) reaches the reactions of
     the default MUMPS run, also when asked to keep a factorisation (there is none to keep:
-    the request is ignored)."""
+    the request is ignored); the next run in the process has the default solver again."""
     mesh = meshes.two_boxes(shared_dir / "boxes.msh")
     scene = _boxes_scene(mesh, mu=0.3)
     direct = run(scene, write=False)
@@ -137,6 +137,10 @@ def test_iterative_solver_gives_the_direct_answer(shared_dir):
                                        atol=1e-9 * R)
         assert ([i.iterations for i in gamg.increments]
                 == [i.iterations for i in direct.increments])
+    # options given to a run are not left to the next one in the process
+    assert not [k for k in PETSc.Options().getAll() if k.startswith("dolfinx_friction_")]
+    _, solver = _solve(scene)
+    assert solver.linear.settings()["pc_type"] == "lu"
 
 
 def _solve(scene, comm=MPI.COMM_WORLD, **kwargs):
