@@ -4,11 +4,14 @@ The default solver is MUMPS (LU; LDL^T where the Jacobian is symmetric) with the
 factorisation kept (``reuse``): it preconditions GMRES for later Jacobians.  In small
 strain only the contact part, supported on the contact surface, changes between
 iterations, so a few Krylov iterations of back-solves replace a factorisation (1.46x
-faster at 67k dofs, same Newton iterations: benchmarks/RESULTS.md).  It is refactorised
-when the matrix pattern changes, and when GMRES does not converge within ``max_krylov``
-iterations; then the next :data:`PAUSE` Jacobians are factorised afresh as well (a stiff
-contact change can need many Krylov iterations).  Keeping pays only where a factorisation costs
-many back-solves: MUMPS's own counts (elimination flops RINFOG(3) against factor
+faster at 67k dofs, same Newton iterations: benchmarks/RESULTS.md); GMRES stops at the
+relative residual the caller asks (Newton's: :func:`~dolfinx_friction.newton.forcing`).
+It is kept across increments, also when a search changed the matrix pattern (the old
+factors precondition the new matrix: 6-12 GMRES iterations on the 35k-dof sliding block),
+and refactorised when GMRES does not converge within ``max_krylov`` iterations; then the
+next :data:`PAUSE` Jacobians are factorised afresh as well (a stiff contact change can
+need many Krylov iterations).  Keeping pays only where a factorisation costs many
+back-solves: MUMPS's own counts (elimination flops RINFOG(3) against factor
 entries INFOG(20)) decide, at least :data:`PAYBACK` back-solves; small 2D problems
 factorise in milliseconds and are factorised every time.  A fresh factorisation is a
 plain direct solve.  Every decision depends on counts, never on timings: runs are
@@ -57,7 +60,9 @@ from petsc4py import PETSc
 from dolfinx_friction import compat
 
 DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
-REUSE = {"ksp_type": "gmres", "ksp_gmres_restart": 20, "ksp_rtol": 1e-12, "ksp_atol": 0.0,
+#: GMRES's relative residual with a kept factorisation, unless the caller asks otherwise
+KRYLOV_RTOL = 1e-12
+REUSE = {"ksp_type": "gmres", "ksp_gmres_restart": 20, "ksp_atol": 0.0,
          "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}  # max_it: ``max_krylov``
 #: Jacobians factorised afresh after GMRES failed with a kept factorisation.
 PAUSE = 3
@@ -90,7 +95,7 @@ class LinearSolver:
         # only a factorisation is kept; only MUMPS reports what it cost
         self.reuse, self.max_krylov = reuse and pc.getType() in ("lu", "cholesky"), max_krylov
         self._counted = self.reuse and pc.getFactorSolverType() == "mumps"
-        self._factored: Optional[PETSc.Mat] = None
+        self._factored: Optional[tuple] = None  # the size of the matrix last factorised
         self._paused = 0  # Jacobians still to factorise afresh
         self._pays = False  # the last factorisation is worth keeping
         self._solve_flops = 0.0  # of one back-solve with the last factorisation
@@ -131,28 +136,30 @@ class LinearSolver:
         self.condensed_solves += 1
         return True
 
-    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> bool:
-        """Solve; returns False when the solver failed (:attr:`failure` says why)."""
-        keep = self.reuse and self._pays and J is self._factored and not self._paused
+    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL
+              ) -> bool:
+        """Solve; returns False when the solver failed (:attr:`failure` says why).
+        ``rtol``: the relative residual GMRES stops at with a kept factorisation."""
+        keep = self.reuse and self._pays and J.getSize() == self._factored and not self._paused
         self._paused = max(self._paused - 1, 0)
-        ok = self._attempt(J, b, x, keep)
+        ok = self._attempt(J, b, x, keep, rtol)
         if ok or not keep:
             return ok
         self._paused = PAUSE
-        return self._attempt(J, b, x, False)
+        return self._attempt(J, b, x, False, rtol)
 
-    def _attempt(self, J, b, x, keep: bool) -> bool:
+    def _attempt(self, J, b, x, keep: bool, rtol: float) -> bool:
         """One solve, with the kept factorisation or a fresh one; whether it converged."""
         self.failure = ""
         if self.reuse:
             self.ksp.setType("gmres" if keep else "preonly")
-            self.ksp.setTolerances(max_it=self.max_krylov)
+            self.ksp.setTolerances(rtol=rtol, max_it=self.max_krylov)
         self.ksp.setOperators(J, J)
         self.ksp.getPC().setReusePreconditioner(keep)
         self.ksp.solve(b, x)
         if not keep:
             self.factorisations += 1
-            self._factored = J
+            self._factored = J.getSize()
             self._pays = self.reuse
             if self._counted:
                 F = self.ksp.getPC().getFactorMatrix()
