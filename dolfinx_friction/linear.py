@@ -80,11 +80,12 @@ class LinearSolver:
                  options: Optional[dict] = None, max_krylov: int = 20, symmetric: bool = False):
         if reuse is None:
             reuse = options is None
+        options = options or {}
         defaults = {**(REUSE if reuse else DIRECT),
-                    **({"pc_type": "cholesky"} if symmetric and options is None else {})}
-        written = write_options(prefix, defaults)
+                    **({"pc_type": "cholesky"} if symmetric and not options else {})}
+        written = write_options(prefix, {k: v for k, v in defaults.items() if k not in options})
         # the given options stay while this solver may factorise (MUMPS reads its own then)
-        weakref.finalize(self, forget_options, write_options(prefix, options or {})).atexit = False
+        weakref.finalize(self, forget_options, write_options(prefix, options)).atexit = False
         self.ksp = PETSc.KSP().create(comm)
         self.ksp.setOptionsPrefix(prefix)
         self.ksp.setFromOptions()
