@@ -54,7 +54,7 @@ def test_unknown_convergence_test_is_refused_naming_the_key():
 def test_stalled_increments_are_cut_back_to_the_same_answer():
     """Ten times the default penalty on the Hertz demo: the statuses at the edge of the zone
     cycle.  Giving up after ``stall_iterations`` without a new lowest residual (and cutting
-    back) reaches the same reactions in fewer iterations (measured 301 -> 192 with 6; 1
+    back) reaches the same reactions in fewer iterations (measured 300 -> 192 with 6; 1
     gives up at any rise of the residual), and never on the last cutback."""
     base = ["contact.0.K=1e7", "step.0.increments=3"]
     runs = {n: run(DEMOS / "hertz_cylinder.toml", write=False,
