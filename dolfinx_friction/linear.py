@@ -96,7 +96,7 @@ class LinearSolver:
         # only a factorisation is kept; only MUMPS reports what it cost
         self.reuse, self.max_krylov = reuse and pc.getType() in ("lu", "cholesky"), max_krylov
         self._counted = self.reuse and pc.getFactorSolverType() == "mumps"
-        self._factored: Optional[tuple] = None  # the size of the matrix last factorised
+        self._factored_size: Optional[tuple] = None  # of the matrix last factorised
         self._paused = 0  # Jacobians still to factorise afresh
         self._pays = False  # the last factorisation is worth keeping
         self._solve_flops = 0.0  # of one back-solve with the last factorisation
@@ -141,7 +141,8 @@ class LinearSolver:
               ) -> bool:
         """Solve; returns False when the solver failed (:attr:`failure` says why).
         ``rtol``: the relative residual GMRES stops at with a kept factorisation."""
-        keep = self.reuse and self._pays and J.getSize() == self._factored and not self._paused
+        keep = (self.reuse and self._pays and not self._paused
+                and J.getSize() == self._factored_size)
         self._paused = max(self._paused - 1, 0)
         ok = self._attempt(J, b, x, keep, rtol)
         if ok or not keep:
@@ -160,7 +161,7 @@ class LinearSolver:
         self.ksp.solve(b, x)
         if not keep:
             self.factorisations += 1
-            self._factored = J.getSize()
+            self._factored_size = J.getSize()
             self._pays = self.reuse
             if self._counted:
                 F = self.ksp.getPC().getFactorMatrix()
