@@ -21,6 +21,7 @@ import io
 import itertools
 import os
 import re
+import signal
 import subprocess
 import sys
 import threading
@@ -197,6 +198,10 @@ def _environment() -> dict[str, str]:
     return env
 
 
+_INTERRUPTED = {-signal.SIGINT, -signal.SIGTERM, 128 + signal.SIGINT, 128 + signal.SIGTERM}
+"""Exit statuses of a run stopped by Ctrl-C or ``terminate()``."""
+
+
 class _Runner:
     """Starts the runs and can stop them all (terminate the running ones, start no more)."""
 
@@ -225,6 +230,8 @@ class _Runner:
                 if proc.returncode < 0 else f"exit status {proc.returncode}"
             if self.stopped:  # (the run may have been killed before it could say so)
                 reason = f"stopped with the interrupted sweep ({reason})"
+            elif not lines and proc.returncode in _INTERRUPTED:  # (before the sweep knew)
+                reason = f"interrupted ({reason})"
         return PointResult(point, proc.returncode, reason, time.perf_counter() - start)
 
     def stop(self) -> None:
