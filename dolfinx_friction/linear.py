@@ -33,8 +33,10 @@ those of the solves it replaced plus :data:`INVESTMENT` of them, else the path a
 taken.  What a solve by that path costs is its flops per solve so far (factorisations,
 and back-solves with a kept one: a block of 16k dofs whose kept factorisation needs 13
 GMRES iterations per Jacobian costs a third of a factorisation per solve, and 1,000
-columns of ``G`` would not pay back there), ``K``'s factorisation before it solved once;
-a factorisation that it keeps is priced once it preconditioned a solve.
+columns of ``G`` would not pay back there), known once that path solved (with a
+factorisation it keeps: once that preconditioned a solve); ``K`` is factorised only if
+``G``'s columns, at that path's back-solve flops, could pay (on a 35k-dof 3D block they
+cannot: 0.67 s of factorisation was spent for nothing).
 Serial only: under MPI the path above.
 ``symmetric=True`` (without user ``options``: Jacobians with the constrained rows and
 columns eliminated, of frictionless contact between linear bodies,
@@ -126,13 +128,13 @@ class LinearSolver:
         """Solve with the Jacobian given as bulk plus contact
         (:class:`~dolfinx_friction.system.JacobianSplit`) by :class:`Condensed`; None when
         that does not pay (or failed): then :meth:`solve` with the assembled Jacobian."""
-        if not (self.reuse and self._counted) or (self._pays and self._solves < 2):
-            return None  # (a factorisation it keeps: priced once it preconditioned a solve)
+        if not (self.reuse and self._counted) or self._solves < (2 if self._pays else 1):
+            return None  # priced once this path solved (with a factorisation it keeps: twice)
         if self._condensed is None:
             self._condensed = Condensed(b.getComm(), self.ksp.getOptionsPrefix(),
                                         split.symmetric)
-        per_solve = self._spent / self._solves if self._solves else 0.0
-        if not self._condensed.solve(split, b, x, per_solve):
+        if not self._condensed.solve(split, b, x, self._spent / self._solves,
+                                     self._solve_flops):
             return None
         self.condensed_solves += 1
         return True
@@ -259,7 +261,7 @@ class Condensed:
         self._regular = False  # K's factorisation succeeded
         self._J: Optional[PETSc.Mat] = None
         self._Z: Optional[list] = None
-        self._flops = self._solve_flops = 0.0
+        self._solve_flops = 0.0
         self._y: Optional[PETSc.Vec] = None
         self._dofs = np.zeros(0, np.int64)
         self._G = np.zeros((0, 0))
@@ -278,7 +280,7 @@ class Condensed:
         F = self.bulk.getPC().getFactorMatrix()
         if F.getMumpsInfog(1) < 0:
             return False
-        self._flops, self._solve_flops = _costs(F, self.symmetric)
+        _, self._solve_flops = _costs(F, self.symmetric)
         self._entries = _entries(F)  # whole columns of K^-1 are kept while they fit
         self._J = None  # the operator K + C
         self._dofs = np.zeros(0, np.int64)
@@ -321,24 +323,31 @@ class Condensed:
         if self._Z is not None and n * self._G.shape[1] > self._entries:
             self._Z = None  # no more memory for whole columns than the factors take
 
-    def solve(self, split, b: PETSc.Vec, x: PETSc.Vec, replaced: float = 0.0) -> bool:
+    def solve(self, split, b: PETSc.Vec, x: PETSc.Vec, replaced: float,
+              solve_flops: float) -> bool:
         """Solve with the kept bulk factorisation; False (``x`` undefined) when this path
         does not pay here or did not converge: the caller solves another way.  ``replaced``:
-        the flops of a solve by the other path (0: unknown, a factorisation of ``K``)."""
+        the flops of a solve by the other path, ``solve_flops``: of a back-solve there
+        (``K``'s estimate before it is factorised)."""
+        coupled = np.zeros(split.bulk.getSize()[0], bool)
+        coupled[split.rows] = coupled[split.cols] = True
+        active = np.flatnonzero(coupled)
         if split.bulk is not self._K:
+            # all of G's columns at the other path's back-solve flops: if they do not pay,
+            # K's factorisation is not paid either
+            columns = (len(active) + 8) * solve_flops + 2.0 / 3.0 * len(active) ** 3
+            if self._spent + columns > replaced * (self.solves + 1 + INVESTMENT):
+                return False
             self._regular = self._factorise(split.bulk)
         if not self._regular:  # e.g. a body held by the contact alone: K is singular
             return False
         self._set_dofs(split.dofs)
-        coupled = np.zeros(self._K.getSize()[0], bool)
-        coupled[split.rows] = coupled[split.cols] = True
-        active = np.flatnonzero(coupled)
         where = np.searchsorted(self._dofs, active).clip(max=max(len(self._dofs) - 1, 0))
         if len(active) and (not len(self._dofs) or (self._dofs[where] != active).any()):
             return False  # a coupling off the surfaces: not the split assumed
         new = where[~self._known[where]]
         flops = (len(new) + 8) * self._solve_flops + 2.0 / 3.0 * len(active) ** 3
-        if self._spent + flops > (replaced or self._flops) * (self.solves + 1 + INVESTMENT):
+        if self._spent + flops > replaced * (self.solves + 1 + INVESTMENT):
             return False
         self._spent += flops
         if len(new):
