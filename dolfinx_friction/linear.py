@@ -176,6 +176,10 @@ class LinearSolver:
         reason = self.ksp.getConvergedReason()
         if reason == compat.ksp_pc_failed():
             self.failure = "singular Jacobian (the factorisation met a zero pivot)"
+            # never solve with (or keep) a failed factorisation: MUMPS then fails in its
+            # solve phase (INFOG(1) = -3) on the next Jacobian, seen under MPI
+            self._factored_size, self._pays = None, False
+            self.ksp.reset()
         elif reason > 0 and self.ksp.getType() == "preonly":
             r = b.duplicate()
             J.mult(x, r)

@@ -215,7 +215,7 @@ def test_kept_factorisation_gives_the_direct_answer(shared_dir, mu):
     direct, plain = _solve(scene, reuse_factorisation=False)
     assert solver.linear.settings()["factor_solver_type"] == "superlu_dist"
     assert solver.linear.factorisations == 1 and solver.linear.krylov_iterations > 0
-    assert plain.linear.factorisations == sum(i.iterations for i in direct)
+    assert plain.linear.factorisations == plain.summary.newton_iterations  # cutbacks' too
     for a, b in zip(kept, direct):
         for group in b.reactions:
             R = np.abs(b.reactions[group]).max()
