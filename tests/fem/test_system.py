@@ -210,9 +210,11 @@ def test_kept_factorisation_gives_the_direct_answer(shared_dir, mu):
     iteration (measured: 1e-13 R), in the same Newton iterations."""
     mesh = meshes.two_boxes(shared_dir / "boxes.msh")
     scene = _boxes_scene(mesh, mu=mu)
+    # the direct run first: a live solver's options stay in PETSc's options database
+    direct, plain = _solve(scene, reuse_factorisation=False)
     kept, solver = _solve(scene, petsc_options={"pc_factor_mat_solver_type": "superlu_dist"},
                           reuse_factorisation=True)
-    direct, plain = _solve(scene, reuse_factorisation=False)
+    assert plain.linear.settings()["factor_solver_type"] == "mumps"
     assert solver.linear.settings()["factor_solver_type"] == "superlu_dist"
     assert solver.linear.factorisations == 1 and solver.linear.krylov_iterations > 0
     assert plain.linear.factorisations == plain.summary.newton_iterations  # cutbacks' too
