@@ -85,13 +85,10 @@ class LinearSolver:
         options = options or {}
         defaults = {**(REUSE if reuse else DIRECT),
                     **({"pc_type": "cholesky"} if symmetric and not options else {})}
-        written = write_options(prefix, {k: v for k, v in defaults.items() if k not in options})
+        self._defaults = {k: v for k, v in defaults.items() if k not in options}
         # the given options stay while this solver may factorise (MUMPS reads its own then)
         weakref.finalize(self, forget_options, write_options(prefix, options)).atexit = False
-        self.ksp = PETSc.KSP().create(comm)
-        self.ksp.setOptionsPrefix(prefix)
-        self.ksp.setFromOptions()
-        forget_options(written)
+        self.ksp = self._new_ksp(comm, prefix)
         pc = self.ksp.getPC()
         #: the Jacobians must be symmetric (:meth:`BlockProblem.jacobian` with ``symmetric``)
         self.symmetric = pc.getType() in ("cholesky", "icc")
@@ -111,6 +108,15 @@ class LinearSolver:
         self.failure = ""
         self._condensed: Optional[Condensed] = None
         self.condensed_solves = 0
+
+    def _new_ksp(self, comm, prefix: str) -> PETSc.KSP:
+        """A KSP set from the options database with this solver's defaults."""
+        written = write_options(prefix, self._defaults)
+        ksp = PETSc.KSP().create(comm)
+        ksp.setOptionsPrefix(prefix)
+        ksp.setFromOptions()
+        forget_options(written)
+        return ksp
 
     def settings(self) -> dict:
         """The solver in use: ``ksp_type`` (``gmres`` on a kept factorisation, when one is
@@ -179,7 +185,9 @@ class LinearSolver:
             # never solve with (or keep) a failed factorisation: MUMPS then fails in its
             # solve phase (INFOG(1) = -3) on the next Jacobian, seen under MPI
             self._factored_size, self._pays = None, False
-            self.ksp.reset()
+            prefix = self.ksp.getOptionsPrefix()
+            self.ksp.destroy()
+            self.ksp = self._new_ksp(b.getComm(), prefix)
         elif reason > 0 and self.ksp.getType() == "preonly":
             r = b.duplicate()
             J.mult(x, r)
