@@ -344,11 +344,16 @@ class Condensed:
         coupled = np.zeros(split.bulk.getSize()[0], bool)
         coupled[split.rows] = coupled[split.cols] = True
         active = np.flatnonzero(coupled)
+
+        def cost(columns: int, per_column: float) -> float:
+            """Flops of this solve: new columns of G, back-solves, the dense solves."""
+            return (columns + 8) * per_column + 2.0 / 3.0 * len(active) ** 3
+
+        budget = replaced * (self.solves + 1 + INVESTMENT) - self._spent
         if split.bulk is not self._K:
             # all of G's columns at the other path's back-solve flops: if they do not pay,
             # K's factorisation is not paid either
-            columns = (len(active) + 8) * solve_flops + 2.0 / 3.0 * len(active) ** 3
-            if self._spent + columns > replaced * (self.solves + 1 + INVESTMENT):
+            if cost(len(active), solve_flops) > budget:
                 return False
             self._regular = self._factorise(split.bulk)
         if not self._regular:  # e.g. a body held by the contact alone: K is singular
@@ -358,8 +363,8 @@ class Condensed:
         if len(active) and (not len(self._dofs) or (self._dofs[where] != active).any()):
             return False  # a coupling off the surfaces: not the split assumed
         new = where[~self._known[where]]
-        flops = (len(new) + 8) * self._solve_flops + 2.0 / 3.0 * len(active) ** 3
-        if self._spent + flops > replaced * (self.solves + 1 + INVESTMENT):
+        flops = cost(len(new), self._solve_flops)
+        if flops > budget:
             return False
         self._spent += flops
         if len(new):
