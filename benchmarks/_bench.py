@@ -155,7 +155,6 @@ def timed_run(scene, comm=None, max_increments: int | None = None, keep_solver: 
 
     from dolfinx_friction.api import run
     comm = comm or MPI.COMM_WORLD
-    clear_petsc_options()
     release_petsc_garbage(comm)
     load0 = load_average()
     comm.barrier()
@@ -202,19 +201,6 @@ def release_petsc_garbage(comm=None) -> None:
         PETSc.garbage_cleanup()
     else:
         PETSc.garbage_cleanup(comm)
-
-
-def clear_petsc_options(prefix: str = "dolfinx_friction_") -> None:
-    """Forget the solver options an earlier run left in PETSc's global options database.
-
-    ``LinearSolver`` forgets its own defaults once read, but ``petsc_options`` given to a
-    run stay there, so without this a later ``run()`` in one process would inherit them.
-    """
-    from petsc4py import PETSc
-    opts = PETSc.Options()
-    for key in list(opts.getAll()):
-        if key.startswith(prefix):
-            opts.delValue(key)
 
 
 def demo_module(name: str):

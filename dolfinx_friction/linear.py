@@ -48,11 +48,14 @@ bodies, friction or not).  Their counts are doubled to LU's for every decision a
 default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
 LU or LDL^T factorisation is kept (``reuse`` is ignored for other preconditioners); one by
 a solver other than MUMPS is kept whatever it cost.  Options go through PETSc's options
-database under ``prefix`` (the command line's win): the defaults only while the solver
-reads them, the given ``options`` while the solver lives.
+database under a prefix of the solver's own (``prefix`` plus a serial number, while the
+solver lives): its defaults, the given ``options`` over them, and over both every option the
+database has under ``prefix`` (the command line's win).  So two live solvers never read each
+other's options.
 """
 from __future__ import annotations
 
+import itertools
 import weakref
 from typing import Optional
 
@@ -85,10 +88,10 @@ class LinearSolver:
         options = options or {}
         defaults = {**(REUSE if reuse else DIRECT),
                     **({"pc_type": "cholesky"} if symmetric and not options else {})}
-        self._defaults = {k: v for k, v in defaults.items() if k not in options}
-        # the given options stay while this solver may factorise (MUMPS reads its own then)
-        weakref.finalize(self, forget_options, write_options(prefix, options)).atexit = False
-        self.ksp = self._new_ksp(comm, prefix)
+        # they stay while this solver may factorise (MUMPS reads its own then)
+        own, written = private_options(prefix, {**defaults, **options})
+        weakref.finalize(self, forget_options, written).atexit = False
+        self.ksp = self._new_ksp(comm, own)
         pc = self.ksp.getPC()
         #: the Jacobians must be symmetric (:meth:`BlockProblem.jacobian` with ``symmetric``)
         self.symmetric = pc.getType() in ("cholesky", "icc")
@@ -109,13 +112,12 @@ class LinearSolver:
         self._condensed: Optional[Condensed] = None
         self.condensed_solves = 0
 
-    def _new_ksp(self, comm, prefix: str) -> PETSc.KSP:
-        """A KSP set from the options database with this solver's defaults."""
-        written = write_options(prefix, self._defaults)
+    @staticmethod
+    def _new_ksp(comm, prefix: str) -> PETSc.KSP:
+        """A KSP set from the options database under this solver's own ``prefix``."""
         ksp = PETSc.KSP().create(comm)
         ksp.setOptionsPrefix(prefix)
         ksp.setFromOptions()
-        forget_options(written)
         return ksp
 
     def settings(self) -> dict:
@@ -211,6 +213,21 @@ def write_options(prefix: str, options: dict) -> list[str]:
             opts[prefix + key] = value
             written.append(prefix + key)
     return written
+
+
+_SERIAL = itertools.count()
+
+
+def private_options(prefix: str, options: dict) -> tuple[str, list[str]]:
+    """Write ``options`` into PETSc's options database under a new prefix of their own
+    (``prefix`` plus a serial number), each replaced by the database's value under
+    ``prefix`` where it has one, together with every other option it has there (the command
+    line wins); returns the new prefix and the names written."""
+    own = f"{prefix}{next(_SERIAL)}_"
+    database = PETSc.Options().getAll()
+    given = {**options, **{name[len(prefix):]: value for name, value in database.items()
+                           if name.startswith(prefix) and not name[len(prefix):][:1].isdigit()}}
+    return own, write_options(own, given)
 
 
 def forget_options(names: list[str]) -> None:

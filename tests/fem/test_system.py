@@ -1,6 +1,8 @@
 """The assembled system: COO pattern, exact global Jacobian, surfaces, serial = parallel."""
 from __future__ import annotations
 
+import gc
+
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -210,10 +212,9 @@ def test_kept_factorisation_gives_the_direct_answer(shared_dir, mu):
     iteration (measured: 1e-13 R), in the same Newton iterations give or take one."""
     mesh = meshes.two_boxes(shared_dir / "boxes.msh")
     scene = _boxes_scene(mesh, mu=mu)
-    # the direct run first: a live solver's options stay in PETSc's options database
-    direct, plain = _solve(scene, reuse_factorisation=False)
     kept, solver = _solve(scene, petsc_options={"pc_factor_mat_solver_type": "superlu_dist"},
                           reuse_factorisation=True)
+    direct, plain = _solve(scene, reuse_factorisation=False)  # while the other one lives
     assert plain.linear.settings()["factor_solver_type"] == "mumps"
     assert solver.linear.settings()["factor_solver_type"] == "superlu_dist"
     assert solver.linear.factorisations == 1 and solver.linear.krylov_iterations > 0
@@ -225,6 +226,29 @@ def test_kept_factorisation_gives_the_direct_answer(shared_dir, mu):
             np.testing.assert_allclose(a.reactions[group], b.reactions[group], atol=1e-10 * R)
     # MUMPS against SuperLU_dist: the last increment may take one iteration more (2 ranks)
     assert all(abs(a.iterations - b.iterations) <= 1 for a, b in zip(kept, direct))
+
+
+def test_live_solvers_keep_their_own_options(shared_dir):
+    """Two live solvers of the same prefix read none of each other's options; options set
+    under the prefix in PETSc's options database (the command line's) win over the given
+    ones; none is left behind."""
+    mesh = meshes.two_boxes(shared_dir / "boxes.msh")
+    scene = _boxes_scene(mesh, mu=0.3)
+    superlu = {"pc_type": "lu", "pc_factor_mat_solver_type": "superlu_dist"}
+    _, given = _solve(scene, petsc_options=superlu)
+    _, plain = _solve(scene)
+    assert given.linear.settings()["factor_solver_type"] == "superlu_dist"
+    assert plain.linear.settings()["factor_solver_type"] == "mumps"
+    database = PETSc.Options()
+    database["dolfinx_friction_pc_factor_mat_solver_type"] = "superlu_dist"
+    try:
+        _, chosen = _solve(scene, petsc_options={**superlu, "pc_factor_mat_solver_type": "mumps"})
+    finally:
+        database.delValue("dolfinx_friction_pc_factor_mat_solver_type")
+    assert chosen.linear.settings()["factor_solver_type"] == "superlu_dist"
+    del given, plain, chosen
+    gc.collect()
+    assert not [k for k in PETSc.Options().getAll() if k.startswith("dolfinx_friction_")]
 
 
 def test_condensed_solve_falls_back_when_the_bulk_is_singular(shared_dir):
