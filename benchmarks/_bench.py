@@ -123,7 +123,7 @@ def _run_first(scene, comm, max_increments: int, **kwargs):
     start, cpu = time.perf_counter(), time.process_time()
     problem = ContactProblem(scene, comm)
     solver = Solver(problem, petsc_options=kwargs.get("petsc_options"),
-                    reuse_factorisation=kwargs.get("reuse_factorisation", False))
+                    reuse_factorisation=kwargs.get("reuse_factorisation"))
     solver.timers.add("setup", time.perf_counter() - start, time.process_time() - cpu)
     increments = []
 
