@@ -20,8 +20,7 @@ from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, Ele
                                               Kinematics, evaluate, face_kinematics,
                                               rigid_kinematics)
 from dolfinx_friction.contact.friction import FrictionState
-from dolfinx_friction.contact.projection import project
-from dolfinx_friction.contact.shapes import surface_vector
+from dolfinx_friction.contact.projection import clearances
 from dolfinx_friction.model import Rigid
 from dolfinx_friction.surfaces import MasterFaces, SlaveNodes
 
@@ -129,6 +128,7 @@ class ContactInteraction:
                                  *(np.zeros(0, int),) * 2)
         self.candidates = _Candidates(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int))
         self._faces: Optional[tuple[np.ndarray, np.ndarray]] = None  # received (nodes, X)
+        self._xi = np.zeros((0, 0))  # (n_candidates, fdim) last projection points, warm starts
         self._gather: Optional[NodeValues] = None
         self._slave_gather: Optional[NodeValues] = None
         self._trial: Optional[FrictionState] = None
@@ -159,6 +159,7 @@ class ContactInteraction:
         nodes = np.concatenate([f[0] for f in incoming]).reshape(-1, m.face.n_nodes)
         X = np.concatenate([f[1] for f in incoming]).reshape(-1, m.face.n_nodes, self.gdim)
         self._faces = (nodes, X)
+        self._centroids = X.mean(axis=1)  # (n_faces, gdim) reference centroids (ties)
         self._face_ids = np.concatenate([f[2] for f in incoming])
 
     def search(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray],
@@ -194,6 +195,8 @@ class ContactInteraction:
         x_f = X_f + self._gather(u).reshape(X_f.shape)
         slave, face = _nearest_faces(x_s, x_f, 16 if self.gdim == 3 else 6)
         nodes = np.concatenate([face_nodes[face], self.slaves.nodes[slave, None]], axis=1)
+        if not np.array_equal(nodes, self.candidates.nodes):  # else warm starts stay valid
+            self._xi = np.tile(self.master.face.centroid, (len(slave), 1))
         self.candidates = _Candidates(slave, face, nodes)
 
     def pair(self, u: PETSc.Vec, iteration: int) -> None:
@@ -224,17 +227,19 @@ class ContactInteraction:
             return
         slave, cand = cands.slave, cands.face
         x_s = self.slaves.X + u_s
-        face = self.master.face
-        x_f = (self._faces[1] + self._gather(u).reshape(self._faces[1].shape))[cand]
-        proj = project(face, x_s[slave], x_f)
-        phi, dphi, _ = face.evaluate(proj.xi)
-        r = x_s[slave] - np.einsum("nk,nkd->nd", phi, x_f)
-        m = surface_vector(np.einsum("nka,nkd->nad", dphi, x_f))
-        g_N = np.einsum("nd,nd->n", r, m) / np.linalg.norm(m, axis=1)
+        x_f = self._faces[1] + self._gather(u).reshape(self._faces[1].shape)
         previous = np.full(n, -1, dtype=np.int64)
         if iteration > 0:
             previous[self.elements.slave] = self.elements.face_id
-        outside = np.where(proj.converged, face.distance_outside(proj.xi), np.inf)
+        # a node that keeps its face (rank 0 below; face ids are unique) wins whatever its
+        # other candidates: they stay unprojected (outside = inf, as if Newton had failed),
+        # which changes neither its choice nor near (lost and fallback then do not apply)
+        current = self._face_ids[cand] == previous[slave]
+        outside, g_N = np.full(len(slave), np.inf), np.full(len(slave), np.inf)
+        self._project(x_s, x_f, np.flatnonzero(current), outside, g_N)
+        kept = np.zeros(n, dtype=bool)
+        kept[slave[current & (outside <= FACE_SLACK)]] = True
+        self._project(x_s, x_f, np.flatnonzero(~current & ~kept[slave]), outside, g_N)
         near = np.zeros(n, dtype=bool)  # projects onto a candidate (up to EDGE_SLACK)
         near[slave[outside <= EDGE_SLACK]] = True
         expected = had | self.closed if iteration == 0 else had
@@ -250,10 +255,20 @@ class ContactInteraction:
                             | fallback)
         unit = TIE * self.slaves.spacing[slave[ok]]
         clearance = np.floor(np.where(rank[ok] == 3, outside[ok] / TIE, np.abs(g_N[ok]) / unit))
-        centroid = np.round(self._faces[1][cand[ok]].mean(axis=1) / (1e3 * unit[:, None]))
+        centroid = np.round(self._centroids[cand[ok]] / (1e3 * unit[:, None]))
         order = ok[np.lexsort((*centroid.T[::-1], clearance, rank[ok], slave[ok]))]
         chosen = order[np.unique(slave[order], return_index=True)[1]]
-        self._set_elements(chosen, proj.xi[chosen])
+        self._set_elements(chosen, self._xi[chosen])
+
+    def _project(self, x_s: np.ndarray, x_f: np.ndarray, rows: np.ndarray, outside: np.ndarray,
+                 g_N: np.ndarray) -> None:
+        """Project the candidates ``rows`` (slave points ``x_s`` (n, gdim) onto received faces
+        ``x_f`` (n_faces, nn, gdim)), each from its last converged projection point since the
+        search (else the centroid); fills ``outside`` and ``g_N`` (n_candidates,) at ``rows``."""
+        c, face = self.candidates, self.master.face
+        xi, outside[rows], g_N[rows] = clearances(face, x_s, x_f, c.slave[rows], c.face[rows],
+                                                  self._xi[rows])
+        self._xi[rows] = np.where(np.isfinite(outside[rows])[:, None], xi, face.centroid)
 
     def slave_displacements(self, u: PETSc.Vec) -> np.ndarray:
         """(n, gdim) displacements of this rank's slave nodes in the system vector ``u``."""
