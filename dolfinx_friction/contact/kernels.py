@@ -271,7 +271,7 @@ def _clearance_batch(code, x, coords, slave, faces, xi, max_iter, outside, g_N):
     phi, dphi, d2phi = np.empty(nn), np.empty((nn, 2)), np.empty((nn, 2, 2))
     q, qa, qab = np.empty(d), np.empty((2, d)), np.empty((2, 2, d))
     xs, xf, m = np.empty(d), np.empty((nn, d)), np.empty(d)
-    dm_dxi, M = np.empty((2, d)), np.empty((2, d, d))  # not needed: _surface_vector's
+    dm_dxi, M = np.empty((2, d)), np.empty((2, d, d))  # _surface_vector's, unused here
     for p in range(len(slave)):
         s, f = slave[p], faces[p]
         for l in range(d):
