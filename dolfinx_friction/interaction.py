@@ -20,8 +20,7 @@ from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, Ele
                                               Kinematics, evaluate, face_kinematics,
                                               rigid_kinematics)
 from dolfinx_friction.contact.friction import FrictionState
-from dolfinx_friction.contact.projection import project
-from dolfinx_friction.contact.shapes import surface_vector
+from dolfinx_friction.contact.projection import clearances
 from dolfinx_friction.model import Rigid
 from dolfinx_friction.surfaces import MasterFaces, SlaveNodes
 
@@ -129,6 +128,9 @@ class ContactInteraction:
                                  *(np.zeros(0, int),) * 2)
         self.candidates = _Candidates(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int))
         self._faces: Optional[tuple[np.ndarray, np.ndarray]] = None  # received (nodes, X)
+        self._face_ids = np.zeros(0, dtype=np.int64)  # global ids of the received faces
+        # (n_candidates, fdim) last projection points: the next pairing's starts
+        self._xi = np.zeros((0, 0 if self.rigid else master.face.fdim))
         self._gather: Optional[NodeValues] = None
         self._slave_gather: Optional[NodeValues] = None
         self._trial: Optional[FrictionState] = None
@@ -159,6 +161,7 @@ class ContactInteraction:
         nodes = np.concatenate([f[0] for f in incoming]).reshape(-1, m.face.n_nodes)
         X = np.concatenate([f[1] for f in incoming]).reshape(-1, m.face.n_nodes, self.gdim)
         self._faces = (nodes, X)
+        self._centroids = X.mean(axis=1)  # (n_faces, gdim) reference centroids (ties)
         self._face_ids = np.concatenate([f[2] for f in incoming])
 
     def search(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray],
@@ -187,6 +190,7 @@ class ContactInteraction:
             self.candidates = _Candidates(np.arange(n), np.full(n, -1), np.stack(
                 [np.full(n, -1 if node is None else node), self.slaves.nodes], axis=1))
             return
+        keys, xi = self._candidate_keys(), self._xi
         x_s = self.slaves.X + self._slave_gather(u)
         self._exchange_faces(u_faces_local, x_s)
         self._gather = NodeValues(u, self._faces[0].ravel(), self.gdim)
@@ -195,6 +199,16 @@ class ContactInteraction:
         slave, face = _nearest_faces(x_s, x_f, 16 if self.gdim == 3 else 6)
         nodes = np.concatenate([face_nodes[face], self.slaves.nodes[slave, None]], axis=1)
         self.candidates = _Candidates(slave, face, nodes)
+        # a candidate kept by the search starts from its last projection point
+        self._xi = np.tile(self.master.face.centroid, (len(slave), 1))
+        _, new, old = np.intersect1d(self._candidate_keys(), keys, assume_unique=True,
+                                     return_indices=True)
+        self._xi[new] = xi[old]
+
+    def _candidate_keys(self) -> np.ndarray:
+        """(n_candidates,) a unique number of each candidate's slave node and global face id."""
+        c = self.candidates
+        return c.slave.astype(np.int64) << 32 | self._face_ids[c.face]
 
     def pair(self, u: PETSc.Vec, iteration: int) -> None:
         """Pair every slave node with one of its candidate masters within the cutoff.
@@ -208,6 +222,12 @@ class ContactInteraction:
         dropped only at the first pairing of an increment.  With a single pairing
         per increment, nodes closed at the last commit also keep an element then,
         however far the predictor has moved them.
+
+        Each candidate is projected from its last projection point (:meth:`_project`).
+        Only stationary points within EDGE_SLACK of a face count, but for the least missed
+        faces of lost nodes, which are projected from the centroids: so the elements are
+        those of projections from the centroids wherever a candidate's stationary point is
+        unique and, when within EDGE_SLACK of the face, reached from the centroid.
         """
         cands = self.candidates
         u_s = self._slave_gather(u)
@@ -224,36 +244,61 @@ class ContactInteraction:
             return
         slave, cand = cands.slave, cands.face
         x_s = self.slaves.X + u_s
-        face = self.master.face
-        x_f = (self._faces[1] + self._gather(u).reshape(self._faces[1].shape))[cand]
-        proj = project(face, x_s[slave], x_f)
-        phi, dphi, _ = face.evaluate(proj.xi)
-        r = x_s[slave] - np.einsum("nk,nkd->nd", phi, x_f)
-        m = surface_vector(np.einsum("nka,nkd->nad", dphi, x_f))
-        g_N = np.einsum("nd,nd->n", r, m) / np.linalg.norm(m, axis=1)
+        x_f = self._faces[1] + self._gather(u).reshape(self._faces[1].shape)
         previous = np.full(n, -1, dtype=np.int64)
         if iteration > 0:
             previous[self.elements.slave] = self.elements.face_id
-        outside = np.where(proj.converged, face.distance_outside(proj.xi), np.inf)
+        # a node that keeps its face (rank 0 below; face ids are unique) wins whatever its
+        # other candidates: they stay unprojected (outside = inf, as if Newton had failed),
+        # which changes neither its choice nor near (lost and fallback then do not apply)
+        current = self._face_ids[cand] == previous[slave]
+        outside, g_N = np.full(len(slave), np.inf), np.full(len(slave), np.inf)
+        self._project(x_s, x_f, np.flatnonzero(current), outside, g_N)
+        kept = np.zeros(n, dtype=bool)
+        kept[slave[current & (outside <= FACE_SLACK)]] = True
+        self._project(x_s, x_f, np.flatnonzero(~current & ~kept[slave]), outside, g_N)
         near = np.zeros(n, dtype=bool)  # projects onto a candidate (up to EDGE_SLACK)
         near[slave[outside <= EDGE_SLACK]] = True
         expected = had | self.closed if iteration == 0 else had
         self.lost = expected & ~near
+        # the least missed faces of lost nodes compare far misses (rank 3 below): those from
+        # the centroids, as warm starts converge on misses a cold start may not reach
+        self._project(x_s, x_f, np.flatnonzero((self.lost & had)[slave]), outside, g_N, cold=True)
         # preference: the current face (within FACE_SLACK), an interior projection, a near
         # miss, the least missed face of a lost node; then the smallest clearance, then the
         # first reference centroid (TIE)
         rank = np.where(outside <= TIE, 1, 2)
-        rank[(self._face_ids[cand] == previous[slave]) & (outside <= FACE_SLACK)] = 0
+        rank[current & (outside <= FACE_SLACK)] = 0
         rank[outside > EDGE_SLACK] = 3
         fallback = (self.lost & had)[slave] & np.isfinite(outside)
         ok = np.flatnonzero(((outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave]))
                             | fallback)
         unit = TIE * self.slaves.spacing[slave[ok]]
         clearance = np.floor(np.where(rank[ok] == 3, outside[ok] / TIE, np.abs(g_N[ok]) / unit))
-        centroid = np.round(self._faces[1][cand[ok]].mean(axis=1) / (1e3 * unit[:, None]))
+        centroid = np.round(self._centroids[cand[ok]] / (1e3 * unit[:, None]))
         order = ok[np.lexsort((*centroid.T[::-1], clearance, rank[ok], slave[ok]))]
         chosen = order[np.unique(slave[order], return_index=True)[1]]
-        self._set_elements(chosen, proj.xi[chosen])
+        self._set_elements(chosen, self._xi[chosen])
+
+    def _project(self, x_s: np.ndarray, x_f: np.ndarray, rows: np.ndarray, outside: np.ndarray,
+                 g_N: np.ndarray, cold: bool = False) -> None:
+        """Project the candidates ``rows`` (slave points ``x_s`` (n, gdim) onto the received
+        faces ``x_f`` (n_faces, nn, gdim)) from their last projection points (``cold``: from
+        the centroid); fills ``outside`` and ``g_N`` (n_candidates,) at ``rows``.
+
+        Where Newton fails from a last point, the centroid's answer counts; the next start is
+        still the last point unless that answer converged (so a far miss converges over
+        pairings)."""
+        c, face = self.candidates, self.master.face
+        centroid = np.tile(face.centroid, (len(rows), 1))
+        xi0 = centroid if cold else self._xi[rows]
+        xi, out, g = clearances(face, x_s, x_f, c.slave[rows], c.face[rows], xi0)
+        again = np.flatnonzero(np.isinf(out) & np.any(xi0 != centroid, axis=1))
+        xi_c, out_c, g_c = clearances(face, x_s, x_f, c.slave[rows[again]], c.face[rows[again]],
+                                      centroid[again])
+        won = np.isfinite(out_c)
+        xi[again[won]], out[again[won]], g[again[won]] = xi_c[won], out_c[won], g_c[won]
+        self._xi[rows], outside[rows], g_N[rows] = xi, out, g
 
     def slave_displacements(self, u: PETSc.Vec) -> np.ndarray:
         """(n, gdim) displacements of this rank's slave nodes in the system vector ``u``."""

@@ -261,6 +261,37 @@ def _project_batch(code, x, coords, xi, max_iter, edge_tol, converged, interior)
                       phi, dphi, d2phi, q, qa, qab)
 
 
+@_jit
+def _clearance_batch(code, x, coords, slave, faces, xi, max_iter, outside, g_N):
+    """Project points ``x[slave[p]]`` (``x`` (n_s, d)) onto faces ``coords[faces[p]]``
+    (``coords`` (n_f, nn, d)) from ``xi`` (n, fdim), in place; fills ``outside`` (inf where
+    Newton did not converge) and the clearances ``g_N`` (n,) (projection.py's clearances)."""
+    nn, d = coords.shape[1], coords.shape[2]
+    fdim = _fdim(code)
+    phi, dphi, d2phi = np.empty(nn), np.empty((nn, 2)), np.empty((nn, 2, 2))
+    q, qa, qab = np.empty(d), np.empty((2, d)), np.empty((2, 2, d))
+    xs, xf, m = np.empty(d), np.empty((nn, d)), np.empty(d)
+    dm_dxi, M = np.empty((2, d)), np.empty((2, d, d))  # _surface_vector's, unused here
+    for p in range(len(slave)):
+        s, f = slave[p], faces[p]
+        for l in range(d):
+            xs[l] = x[s, l]
+            for k in range(nn):
+                xf[k, l] = coords[f, k, l]
+        ok, xi0, xi1 = _project_one(code, xs, xf, xi[p, 0], xi[p, 1] if fdim == 2 else 0.0,
+                                    max_iter, phi, dphi, d2phi, q, qa, qab)
+        xi[p, 0] = xi0
+        if fdim == 2:
+            xi[p, 1] = xi1
+        outside[p] = _distance_outside(code, xi0, xi1) if ok else np.inf
+        _surface_vector(fdim, qa, qab, m, dm_dxi, M)
+        r_m = m_m = 0.0
+        for l in range(d):
+            r_m += (xs[l] - q[l]) * m[l]
+            m_m += m[l] * m[l]
+        g_N[p] = r_m / math.sqrt(m_m)
+
+
 # ----------------------------------------------------------------------------- kinematics
 @_jit
 def _surface_vector(fdim, qa, qab, m, dm_dxi, M):
@@ -626,6 +657,17 @@ def project(face: FaceType, x: Array, coords: Array, xi0: Array | None = None,
     _project_batch(FACE_CODES[face.name], _f64(x), _f64(coords), xi, int(max_iter),
                    float(edge_tol), converged, interior)
     return Projection(xi, interior, converged)
+
+
+def clearances(face: FaceType, x: Array, coords: Array, slave: np.ndarray, faces: np.ndarray,
+               xi0: Array) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Compiled :func:`~dolfinx_friction.contact.projection.clearances_numpy`."""
+    n = len(slave)
+    xi, outside, g_N = _f64(np.array(xi0, dtype=float)), np.empty(n), np.empty(n)
+    _clearance_batch(FACE_CODES[face.name], _f64(x), _f64(coords),
+                     np.ascontiguousarray(slave, dtype=np.int64),
+                     np.ascontiguousarray(faces, dtype=np.int64), xi, MAX_ITER, outside, g_N)
+    return xi, outside, g_N
 
 
 def face_kinematics(face: FaceType, X_slave: Array, u_slave: Array, X_face: Array,

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dolfinx_friction.contact import backend
-from dolfinx_friction.contact.shapes import Array, FaceType
+from dolfinx_friction.contact.shapes import Array, FaceType, surface_vector
 
 EDGE_TOL = 1e-9  # parametric tolerance for "on the face"
 
@@ -90,6 +90,34 @@ def project_numpy(face: FaceType, x: Array, coords: Array, xi0: Array | None = N
         active = active[~done]
     interior = converged & (face.distance_outside(xi) <= edge_tol)
     return Projection(xi, interior, converged)
+
+
+def clearances(face: FaceType, x: Array, coords: Array, slave: np.ndarray, faces: np.ndarray,
+               xi0: Array) -> tuple[Array, Array, Array]:
+    """Project points ``x[slave]`` (``x`` (n_s, gdim), ``slave`` (n,)) onto the faces
+    ``coords[faces]`` (``coords`` (n_f, nn, gdim)) from ``xi0`` (n, fdim).
+
+    Returns the stationary points ``xi`` (n, fdim), how far (parametric) they lie
+    outside their faces (inf where Newton did not converge) and the clearances
+    ``g_N = r . m / |m|`` (n,).  Runs the compiled kernel or :func:`clearances_numpy`,
+    as :mod:`backend` selects.
+    """
+    kernels = backend.compiled()
+    impl = clearances_numpy if kernels is None else kernels.clearances
+    return impl(face, x, coords, slave, faces, xi0)
+
+
+def clearances_numpy(face: FaceType, x: Array, coords: Array, slave: np.ndarray,
+                     faces: np.ndarray, xi0: Array) -> tuple[Array, Array, Array]:
+    """:func:`clearances` in numpy (the reference)."""
+    x_s, x_f = x[slave], coords[faces]
+    proj = project_numpy(face, x_s, x_f, xi0)
+    phi, dphi, _ = face.evaluate(proj.xi)
+    r = x_s - np.einsum("nk,nkd->nd", phi, x_f)
+    m = surface_vector(np.einsum("nka,nkd->nad", dphi, x_f))
+    g_N = np.einsum("nd,nd->n", r, m) / np.linalg.norm(m, axis=1)
+    outside = np.where(proj.converged, face.distance_outside(proj.xi), np.inf)
+    return proj.xi, outside, g_N
 
 
 def closest_point(face: FaceType, x: Array, coords: Array, xi0: Array | None = None,

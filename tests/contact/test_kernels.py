@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 kernels = pytest.importorskip("dolfinx_friction.contact.kernels")
 
@@ -24,7 +26,7 @@ from dolfinx_friction.contact.element import (ContactParameters, evaluate,  # no
                                               evaluate_numpy, face_kinematics_numpy,
                                               rigid_kinematics_numpy)
 from dolfinx_friction.contact.laws import Exponential, Linear, Tabular  # noqa: E402
-from dolfinx_friction.contact.projection import project_numpy  # noqa: E402
+from dolfinx_friction.contact.projection import clearances_numpy, project_numpy  # noqa: E402
 from dolfinx_friction.contact.shapes import FACE_TYPES  # noqa: E402
 
 from .helpers import (FACES, LAW_NAMES, LAWS, RIGID_SHAPES, STATES, face_case,  # noqa: E402
@@ -155,6 +157,64 @@ def test_projection_equal_numpy(name):
     assert full.converged.all() and not full.interior.all()
     if xi0 is not None:
         assert np.array_equal(xi0, starts[1])  # the start is not modified
+
+
+def candidate_case(name: str, rng: np.random.Generator, n_points: int = 20, k: int = 4,
+                   **shape) -> tuple:
+    """Pairing's candidates: ``n_points`` points, each near one of 8 random faces (some
+    beyond its edges, up to 0.3 off it) and paired with ``k`` faces (its own and random
+    ones, in random order): ``(x, x_face, slave, faces)``."""
+    face = FACE_TYPES[name]
+    x_face = random_faces(face, 8, rng, **shape)
+    own = rng.integers(0, 8, n_points)
+    xi = random_interior_xi(face, n_points, rng, margin=-0.4)
+    q, nrm, _ = surface_point(face, x_face[own], xi)
+    x = q + rng.uniform(-0.3, 0.3, n_points)[:, None] * nrm
+    faces = np.concatenate([own[:, None], rng.integers(0, 8, (n_points, k - 1))], axis=1)
+    order = rng.permutation(n_points * k)
+    return x, x_face, np.repeat(np.arange(n_points), k)[order], faces.ravel()[order]
+
+
+def assert_clearances_equal(name: str, x, x_face, slave, faces, xi0) -> tuple:
+    """The kernel's clearances equal the numpy reference's; returns the reference."""
+    face = FACE_TYPES[name]
+    start = xi0.copy()
+    new = kernels.clearances(face, x, x_face, slave, faces, xi0)
+    ref = clearances_numpy(face, x, x_face, slave, faces, xi0)
+    assert np.array_equal(xi0, start)  # the start is not modified
+    assert np.array_equal(np.isfinite(new[1]), np.isfinite(ref[1]))
+    finite = np.isfinite(ref[1])
+    for label, a, b in (("xi", new[0], ref[0]), ("outside", new[1][finite], ref[1][finite]),
+                        ("g_N", new[2], ref[2])):
+        err = record(f"kernels: clearances {label} [{name}]", rel(a, b))
+        assert err <= TOL, (label, err)
+    return ref
+
+
+@pytest.mark.parametrize("name", FACES)
+def test_clearances_equal_numpy(name):
+    """Points paired with several faces (repeats, any order): cold and warm starts, points
+    inside and beyond the edges."""
+    face = FACE_TYPES[name]
+    x, x_face, slave, faces = candidate_case(name, rng_for("kernel clearances", name))
+    cold = np.tile(face.centroid, (len(slave), 1))
+    xi, outside, _ = assert_clearances_equal(name, x, x_face, slave, faces, cold)
+    assert (outside == 0).any() and (outside > 0.05).any()
+    warm = xi + 0.01 * rng_for("warm", name).uniform(-1, 1, xi.shape)
+    assert_clearances_equal(name, x, x_face, slave, faces, warm)
+    none = np.zeros(0, dtype=np.int64)
+    assert_clearances_equal(name, x, x_face, none, none, cold[:0])
+
+
+@settings(max_examples=40, derandomize=True, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(FACES), st.integers(0, 2**31 - 1), st.floats(0.0, 0.3),
+       st.floats(0.0, 0.08))
+def test_property_clearances_equal_numpy(name, seed, warp, jitter):
+    x, x_face, slave, faces = candidate_case(name, np.random.default_rng(seed), warp=warp,
+                                             jitter=jitter)
+    cold = np.tile(FACE_TYPES[name].centroid, (len(slave), 1))
+    assert_clearances_equal(name, x, x_face, slave, faces, cold)
 
 
 def test_empty_batches():

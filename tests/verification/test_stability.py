@@ -365,12 +365,9 @@ def _coarse_ironing(path) -> Path:
     return path
 
 
-def test_contact_zone_lost_in_one_increment_is_cut_back(shared_dir):
+def _lost_zone_scene(shared_dir) -> Scene:
     """Coarse ironing, mu = 1, K = stick slope = 10 E/h, half a die element of drag per
-    increment, plain Newton (the maps' ironing_stick_mu cell): diverging iterates threw the
-    whole contact zone off the die, and two drag increments were accepted with no node in
-    contact and no die force (LOST).  An increment that loses a whole contact zone by
-    sliding off the master is now cut back; every drag increment keeps its contact."""
+    increment, plain Newton (the maps' ironing_stick_mu cell)."""
     from dataclasses import replace
 
     from dolfinx_friction.scene import load_scene
@@ -381,10 +378,47 @@ def test_contact_zone_lost_in_one_increment_is_cut_back(shared_dir):
     press, drag = base.steps
     drag_bcs = tuple(replace(b, u=(4.0, *b.u[1:])) if b.on == "die_top" else b
                      for b in drag.bcs)
-    scene = replace(base, mesh=_coarse_ironing(shared_dir / "ironing_coarse.msh"),
-                    contacts=(pair,), output=Output(fields=False, contact_table=False),
-                    steps=(replace(press, **kw),
-                           replace(drag, bcs=drag_bcs, increments=20, **kw)))
-    result = run(scene, write=False)
+    return replace(base, mesh=_coarse_ironing(shared_dir / "ironing_coarse.msh"),
+                   contacts=(pair,), output=Output(fields=False, contact_table=False),
+                   steps=(replace(press, **kw),
+                          replace(drag, bcs=drag_bcs, increments=20, **kw)))
+
+
+def test_contact_zone_lost_in_one_increment_is_cut_back(shared_dir):
+    """Coarse ironing, mu = 1, K = stick slope = 10 E/h, half a die element of drag per
+    increment, plain Newton (the maps' ironing_stick_mu cell): diverging iterates threw the
+    whole contact zone off the die, and two drag increments were accepted with no node in
+    contact and no die force (LOST).  An increment that loses a whole contact zone by
+    sliding off the master is now cut back; every drag increment keeps its contact."""
+    result = run(_lost_zone_scene(shared_dir), write=False)
     assert result.summary.converged and result.summary.cutbacks > 0
     assert all(inc.active > 0 for inc in result.increments)
+
+
+def test_warm_started_pairing_pairs_as_from_the_centroids(shared_dir, monkeypatch):
+    """Pairing projects each candidate from its last projection point (interaction.py); in
+    the lost-zone ironing run (fast sliding, nodes lost, cutbacks) every pairing takes the
+    elements and lost nodes that projections from the face centroids give, xi to round-off."""
+    import copy
+
+    from dolfinx_friction.interaction import ContactInteraction
+    warm, pairings = ContactInteraction.pair, []
+
+    def pair_twice(self, u, iteration):
+        state = ("lost", "elements", "_first_pairing", "initial_gap", "_xi")
+        saved = {k: copy.deepcopy(getattr(self, k)) for k in state}
+        self._xi[:] = self.master.face.centroid
+        warm(self, u, iteration)
+        cold = (self.elements, self.lost)
+        for k, v in saved.items():
+            setattr(self, k, v)
+        warm(self, u, iteration)
+        for name in ("slave", "face", "candidate"):
+            assert np.array_equal(getattr(self.elements, name), getattr(cold[0], name))
+        assert np.array_equal(self.lost, cold[1])
+        assert np.allclose(self.elements.xi, cold[0].xi, rtol=0.0, atol=1e-12)
+        pairings.append(int(cold[1].sum()))
+
+    monkeypatch.setattr(ContactInteraction, "pair", pair_twice)
+    assert run(_lost_zone_scene(shared_dir), write=False).summary.converged
+    assert len(pairings) > 100 and MPI.COMM_WORLD.allreduce(sum(pairings)) > 0  # nodes lost
