@@ -17,6 +17,9 @@ from petsc4py import PETSc
 
 #: the attribute of a serial matrix that holds the array PETSc stores its values in
 _VALUES = "dolfinx_friction_values"
+#: the attribute of a serial matrix filled by :meth:`CooPattern.fill_over`: (base, slots,
+#: the matrix's state after that fill)
+_BASE = "dolfinx_friction_base"
 
 
 def ownership_ends(comm: MPI.Comm, n_owned: int) -> np.ndarray:
@@ -33,6 +36,8 @@ class _Block:
         self.send_counts = np.bincount(owner, minlength=comm.size).astype(np.int64)
         self.recv_counts = np.array(comm.alltoall(self.send_counts.tolist()), dtype=np.int64)
         self.slots = np.empty(0, dtype=np.int64)
+        self.unique: np.ndarray | None = None  # its distinct slots (sorted), and of each entry
+        self.position: np.ndarray | None = None  # its index in them
 
     def exchange(self, comm: MPI.Comm, send: np.ndarray, dtype) -> np.ndarray:
         """Send entries (in constructor order) to the owners of their rows."""
@@ -135,11 +140,27 @@ class CooPattern:
         received = b.exchange(self.comm, np.asarray(values, dtype=float).ravel(), np.float64)
         return np.bincount(b.slots, weights=received, minlength=self.nnz)
 
-    def row_slots(self, local_rows: np.ndarray) -> np.ndarray:
-        """Slots of all entries in the given owned rows (local indices)."""
+    def gather_slots(self, block: int, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """One block's values summed into its own slots: ``(slots, sums)``, ``slots`` sorted
+        and unique (what :meth:`gather_values` gives there; zero elsewhere)."""
+        b = self._blocks[block]
+        if b.unique is None:
+            b.unique, b.position = np.unique(b.slots, return_inverse=True)
+        received = b.exchange(self.comm, np.asarray(values, dtype=float).ravel(), np.float64)
+        return b.unique, np.bincount(b.position, weights=received, minlength=len(b.unique))
+
+    def row_slots(self, local_rows: np.ndarray, columns: np.ndarray | None = None
+                  ) -> np.ndarray:
+        """Slots (sorted) of all entries in the given owned rows (local indices) and, if
+        given, in the given columns (global indices)."""
         mask = np.zeros(self.n_owned, dtype=bool)
         mask[local_rows] = True
-        return np.flatnonzero(mask[self._row_of_slot])
+        found = mask[self._row_of_slot]
+        if columns is not None:
+            mask = np.zeros(self.n_global, dtype=bool)
+            mask[columns] = True
+            found |= mask[self.indices]
+        return np.flatnonzero(found)
 
     def create_matrix(self, block_size: int = 1) -> PETSc.Mat:
         """A matrix of this pattern, zero.  In serial PETSc stores its values in an array
@@ -164,3 +185,22 @@ class CooPattern:
         else:
             values[:] = data
         A.assemble()  # also tells PETSc the values changed (a factorisation is redone)
+
+    def fill_over(self, A: PETSc.Mat, base: np.ndarray, slots: np.ndarray,
+                  values: np.ndarray) -> None:
+        """Overwrite the values of ``A`` with CSR ``base``, except ``values`` at ``slots``.
+        In serial, where ``A`` is unchanged since its last such fill with the same ``base``
+        and ``slots`` objects, only ``slots`` are written."""
+        held = A.getAttr(_VALUES)
+        if held is None:
+            data = base.copy()
+            data[slots] = values
+            A.setValuesCSR(self.indptr, self.indices, data)
+            A.assemble()
+            return
+        last = A.getAttr(_BASE)
+        if last is None or last[0] is not base or last[1] is not slots or last[2] != A.stateGet():
+            held[:] = base
+        held[slots] = values
+        A.assemble()
+        A.setAttr(_BASE, (base, slots, A.stateGet()))

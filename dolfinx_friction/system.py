@@ -199,7 +199,9 @@ class BlockProblem:
         self._abs: Optional[PETSc.Mat] = None  # |J_bulk|, for the round-off floor
         self._abs_data: Optional[np.ndarray] = None
         self._bulk_data: Optional[np.ndarray] = None  # bulk Jacobian values (last, or constant)
-        self._bc_slots: Optional[tuple] = None
+        self._zeroed: Optional[tuple] = None  # (key, slots of the constrained rows, columns)
+        self._static: Optional[tuple] = None  # (key, free obstacle rows, Jacobian without contact)
+        self._coupling_slots: Optional[tuple] = None  # (key, contacts' slots, zeroed ones)
         self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
         self._surface_dofs: Optional[np.ndarray] = None  # of all contacts (fixed in serial)
         self._modes: Optional[PETSc.NullSpace] = None
@@ -403,7 +405,6 @@ class BlockProblem:
             for c in self.contacts:
                 c.register_matrix(self._J)
             self._versions = versions
-            self._bc_slots = None
         return self._J
 
     def jacobian(self, x: PETSc.Vec, A: Optional[PETSc.Mat] = None,
@@ -420,35 +421,68 @@ class BlockProblem:
                 self._bulk_data = self._bulk_values()
             base = self._bulk_data
         with self.timers.measure("contact_assembly"):
-            rows = self.constrained_rows
-            data = self._pattern.from_base(base) + self._contact_values()
-            data[self._bc_slots[1]] = 0.0
-            data[self._pattern.diagonal_slots[rows]] = 1.0
-            # A force-controlled obstacle may have no stiffness along some axis (a
-            # frictionless plane in its own plane): a tiny spring in the Jacobian only keeps
-            # it regular; the residual, hence the solution, is unchanged.
-            free = self._pattern.diagonal_slots[self.free_obstacle_rows()]
-            data[free] += self._rigid_spring(base)
-            self._pattern.fill(A, data)
-            if symmetric:
-                A.zeroRowsColumns(self._global_rows(rows), diag=1.0)
+            static = self._static_values(base, symmetric)
+            slots, values = self._contact_values(static, symmetric)
+            self._pattern.fill_over(A, static, slots, values)
         return A
+
+    def _static_values(self, base: np.ndarray, symmetric: bool) -> np.ndarray:
+        """CSR data (pattern of :meth:`matrix`) of the Jacobian without contact: the bulk
+        ``base``, the constrained rows (``symmetric``: and columns) zero but for a unit
+        diagonal, the obstacles' springs.  Kept while pattern, ``base`` and rows are the
+        same objects and the free obstacle rows the same (linear bodies: once per search)."""
+        rows, free = self.constrained_rows, self.free_obstacle_rows()
+        key = (self._pattern, base, rows, symmetric)
+        cached = self._static
+        if (cached is not None and all(a is b for a, b in zip(cached[0], key))
+                and np.array_equal(cached[1], free)):
+            return cached[2]
+        data = self._pattern.from_base(base)
+        data[self._zeroed_slots(rows, symmetric)] = 0.0
+        # A force-controlled obstacle may have no stiffness along some axis (a
+        # frictionless plane in its own plane): a tiny spring in the Jacobian only keeps
+        # it regular; the residual, hence the solution, is unchanged.
+        data[self._pattern.diagonal_slots[free]] += self._rigid_spring(base)
+        data[self._pattern.diagonal_slots[rows]] = 1.0
+        self._static = (key, free, data)
+        return data
+
+    def _zeroed_slots(self, rows: np.ndarray, symmetric: bool) -> np.ndarray:
+        """CSR slots of the constrained ``rows`` (``symmetric``: and of their columns on
+        every rank; collective), kept with the pattern and the rows."""
+        key = (self._pattern, rows, symmetric)
+        cached = self._zeroed
+        if cached is None or any(a is not b for a, b in zip(cached[0], key)):
+            columns = (np.concatenate(self.comm.allgather(self._global_rows(rows)))
+                       if symmetric else None)
+            self._zeroed = cached = (key, self._pattern.row_slots(rows, columns))
+        return cached[1]
+
+    def _contact_values(self, static: np.ndarray, symmetric: bool
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """The slots of the contacts' couplings (kept with the pattern) and the Jacobian's
+        values there: ``static`` plus the contacts' tangents, but in the constrained rows
+        (``symmetric``: and columns)."""
+        rows = self.constrained_rows
+        gathered = [self._pattern.gather_slots(k, c.coupling_values())
+                    for k, c in enumerate(self.contacts)]
+        key = (self._pattern, rows, symmetric)
+        cached = self._coupling_slots
+        if cached is None or any(a is not b for a, b in zip(cached[0], key)):
+            slots = np.unique(np.concatenate([at for at, _ in gathered]
+                                             + [np.zeros(0, np.int64)]))
+            zeroed = np.isin(slots, self._zeroed_slots(rows, symmetric))
+            self._coupling_slots = cached = (key, slots, zeroed)
+        _, slots, zeroed = cached
+        contact = np.zeros(len(slots))
+        for at, sums in gathered:
+            contact[np.searchsorted(slots, at)] += sums
+        contact[zeroed] = 0.0
+        return slots, static[slots] + contact
 
     def _global_rows(self, rows: np.ndarray) -> np.ndarray:
         """Global indices of owned local rows."""
         return (rows + self.x.getOwnershipRange()[0]).astype(PETSc.IntType)
-
-    def _contact_values(self) -> np.ndarray:
-        """CSR data (pattern of :meth:`matrix`) of the contacts' tangents, zero in the
-        constrained rows."""
-        contact = np.zeros(self._pattern.nnz)
-        for k, c in enumerate(self.contacts):
-            contact += self._pattern.gather_values(k, c.coupling_values())
-        rows = self.constrained_rows
-        if self._bc_slots is None or self._bc_slots[0] is not rows:
-            self._bc_slots = (rows, self._pattern.row_slots(rows))
-        contact[self._bc_slots[1]] = 0.0
-        return contact
 
     def split(self) -> Optional["JacobianSplit"]:
         """The Jacobian at the contacts' last update as a constant bulk matrix plus a

@@ -51,6 +51,42 @@ def test_coo_pattern_sums_blocks_like_a_dense_matrix(comm, extended):
     assert np.abs(mine - dense[start:end]).max() < 1e-13
 
 
+def _csr_rows(A: PETSc.Mat, N: int) -> np.ndarray:
+    """The owned rows of ``A`` as a dense array (n_owned, N)."""
+    start, end = A.getOwnershipRange()
+    indptr, indices, data = A.getValuesCSR()
+    rows = np.zeros((end - start, N))
+    for i in range(end - start):
+        rows[i, indices[indptr[i]:indptr[i + 1]]] = data[indptr[i]:indptr[i + 1]]
+    return rows
+
+
+def test_fill_over_writes_a_block_over_a_kept_base(comm):
+    """``fill_over``: the base with one block's sums at their slots (``gather_slots``), fill
+    after fill with new block values; also after the matrix was changed in between (scaled:
+    the whole base is written again) and after a plain ``fill``."""
+    rng = np.random.default_rng(comm.rank)
+    n_owned = 6 + comm.rank
+    N = comm.allreduce(n_owned)
+    blocks = [(rng.integers(0, N, 60), rng.integers(0, N, 60)) for _ in range(2)]
+    pattern = CooPattern(comm, n_owned, blocks)
+    base = pattern.gather_values(0, rng.standard_normal(60))
+    base[pattern.diagonal_slots] += 10.0
+    A = pattern.create_matrix()
+    for change in (None, "scale", "fill", None):
+        if change == "scale":
+            A.scale(3.0)
+        elif change == "fill":
+            pattern.fill(A, np.zeros(pattern.nnz))
+        values = rng.standard_normal(60)
+        slots, sums = pattern.gather_slots(1, values)
+        assert np.array_equal(slots, np.unique(slots))
+        pattern.fill_over(A, base, slots, base[slots] + sums)
+        expected = A.duplicate()
+        pattern.fill(expected, base + pattern.gather_values(1, values))
+        assert np.abs(_csr_rows(A, N) - _csr_rows(expected, N)).max() < 1e-13
+
+
 def _boxes_scene(mesh, model: str = "linear", **contact) -> Scene:
     # CalculiX's K and lambda: with the default lambda = E/h a slave node's trial force
     # lies within the finite-difference step of the Coulomb cone (1e-2 at h = 1e-7, 2e-9
