@@ -129,6 +129,7 @@ class ContactInteraction:
         self.candidates = _Candidates(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int))
         self._faces: Optional[tuple[np.ndarray, np.ndarray]] = None  # received (nodes, X)
         self._face_ids = np.zeros(0, dtype=np.int64)  # global ids of the received faces
+        self._centroids = np.zeros((0, gdim))  # their reference centroids (ties in pairing)
         # (n_candidates, fdim) last projection points: the next pairing's starts
         self._xi = np.zeros((0, 0 if self.rigid else master.face.fdim))
         self._gather: Optional[NodeValues] = None
@@ -161,7 +162,7 @@ class ContactInteraction:
         nodes = np.concatenate([f[0] for f in incoming]).reshape(-1, m.face.n_nodes)
         X = np.concatenate([f[1] for f in incoming]).reshape(-1, m.face.n_nodes, self.gdim)
         self._faces = (nodes, X)
-        self._centroids = X.mean(axis=1)  # (n_faces, gdim) reference centroids (ties)
+        self._centroids = X.mean(axis=1)
         self._face_ids = np.concatenate([f[2] for f in incoming])
 
     def search(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray],

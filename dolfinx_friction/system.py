@@ -117,6 +117,11 @@ class _Body:
         return self.A.getValuesCSR()[2]
 
 
+def _same(kept: tuple, key: tuple) -> bool:
+    """Whether a cache's key holds the very objects of ``key`` (identity, not equality)."""
+    return all(a is b for a, b in zip(kept, key))
+
+
 class BlockProblem:
     """Residual and Jacobian of several bodies with contact, in one block numbering.
 
@@ -434,8 +439,7 @@ class BlockProblem:
         rows, free = self.constrained_rows, self.free_obstacle_rows()
         key = (self._pattern, base, rows, symmetric)
         cached = self._static
-        if (cached is not None and all(a is b for a, b in zip(cached[0], key))
-                and np.array_equal(cached[1], free)):
+        if cached is not None and _same(cached[0], key) and np.array_equal(cached[1], free):
             return cached[2]
         data = self._pattern.from_base(base)
         data[self._zeroed_slots(rows, symmetric)] = 0.0
@@ -452,7 +456,7 @@ class BlockProblem:
         every rank; collective), kept with the pattern and the rows."""
         key = (self._pattern, rows, symmetric)
         cached = self._zeroed
-        if cached is None or any(a is not b for a, b in zip(cached[0], key)):
+        if cached is None or not _same(cached[0], key):
             columns = (np.concatenate(self.comm.allgather(self._global_rows(rows)))
                        if symmetric else None)
             self._zeroed = cached = (key, self._pattern.row_slots(rows, columns))
@@ -468,7 +472,7 @@ class BlockProblem:
                     for k, c in enumerate(self.contacts)]
         key = (self._pattern, rows, symmetric)
         cached = self._coupling_slots
-        if cached is None or any(a is not b for a, b in zip(cached[0], key)):
+        if cached is None or not _same(cached[0], key):
             slots = np.unique(np.concatenate([at for at, _ in gathered]
                                              + [np.zeros(0, np.int64)]))
             zeroed = np.isin(slots, self._zeroed_slots(rows, symmetric))
