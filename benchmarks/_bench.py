@@ -117,9 +117,9 @@ class _Stop(Exception):
 
 def _run_first(scene, comm, max_increments: int, **kwargs):
     """Like ``api.run(write=False)``, but stop after ``max_increments`` converged increments."""
-    from dolfinx_friction.api import RunResult
-    from dolfinx_friction.problem import ContactProblem
-    from dolfinx_friction.solver import Solver
+    from dolfinx_friction.scene.runner import RunResult
+    from dolfinx_friction.scene.build import ContactProblem
+    from dolfinx_friction.scene.driver import Solver
     start, cpu = time.perf_counter(), time.process_time()
     problem = ContactProblem(scene, comm)
     solver = Solver(problem, petsc_options=kwargs.get("petsc_options"),
@@ -149,11 +149,11 @@ def timed_run(scene, comm=None, max_increments: int | None = None, keep_solver: 
     cutbacks, iterations per increment, phase seconds (``phases``: CPU, ``phases_wall``:
     wall clock; the slowest rank's), load average, peak RSS.
     ``max_increments``: stop after that many converged increments; ``keep_solver``: the
-    result also has ``.solver`` (the :class:`~dolfinx_friction.solver.Solver`).
+    result also has ``.solver`` (the :class:`~dolfinx_friction.scene.driver.Solver`).
     """
     from mpi4py import MPI
 
-    from dolfinx_friction.api import run
+    from dolfinx_friction.scene.runner import run
     comm = comm or MPI.COMM_WORLD
     release_petsc_garbage(comm)
     load0 = load_average()

@@ -9,8 +9,8 @@
 The scene of ``bench_cost.py`` (block on a foundation, structured first-order hexahedra,
 E = 1000, nu = 0.3, linear law K = 50 E, sigma_inf = E/70000, c0 = 1e-3, mu = 0.3,
 lambda = E/2; press 0.005 in 1 increment, slide 0.02 in 2 increments).  The very same
-:class:`~dolfinx_friction.model.Scene` object is solved by dolfinx_friction (serial, MUMPS,
-exact tangent, tolerance 1e-9 r0) and written by :func:`dolfinx_friction.calculix.write_inp`
+:class:`~dolfinx_friction.scene.model.Scene` object is solved by dolfinx_friction (serial, MUMPS,
+exact tangent, tolerance 1e-9 r0) and written by :func:`dolfinx_friction.reference.calculix.write_inp`
 for ``ccx`` (same mesh, nodes, laws, parameters, increments; the deck's default tightened
 ``*CONTROLS``), which runs single-threaded (``OMP_NUM_THREADS=1``) -- one core each.
 
@@ -72,7 +72,7 @@ def one_size(n: int) -> dict:
 def compare(scene, groups, label: str) -> dict:
     """Both codes on ``scene``: times, iterations and every increment's reactions of
     ``groups`` (``|R - R_ccx| / |R_ccx|``)."""
-    from dolfinx_friction import calculix
+    from dolfinx_friction.reference import calculix
     row = {"case": label}
     # ---- CalculiX
     inp = B.work_dir("ccx") / f"{label}.inp"
@@ -146,7 +146,7 @@ def hertz_scene(h: float, three_d: bool):
     (quadrilaterals, plane strain) or as its twin of one layer of hexahedra (the same
     quadrilaterals extruded by ``LAYER``, ``u_z = 0`` on both faces)."""
     import _meshes as M
-    from dolfinx_friction.model import BC, Body, ContactPair, Output, Scene, Step
+    from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Scene, Step
     two = B.work_dir("ccx") / f"hertz_h{h}_2d.msh"
     if not two.exists():
         B.demo_module("hertz_cylinder").build_mesh(two, h_contact=h)
@@ -245,7 +245,7 @@ def kind_rows(kind: str, quick: bool):
     """The rows of one problem kind, one at a time (both codes; ours also in true 2D where
     the kind has a 2D twin).  A case ccx does not finish is a row with ``ccx_error`` and
     ours alone."""
-    from dolfinx_friction.calculix import CcxError
+    from dolfinx_friction.reference.calculix import CcxError
     for case in kind_cases(kind, quick):
         row = {"kind": kind, "size": case.size, "mu": case.mu}
         c0 = B.children_cpu()
@@ -346,7 +346,7 @@ def _reactions_cell(r: dict) -> str:
 
 
 def kinds_report(rows, machine, load_end) -> str:
-    from dolfinx_friction import calculix
+    from dolfinx_friction.reference import calculix
     kinds = ",".join(dict.fromkeys(r["kind"] for r in rows))
     out = [
         f"`benchmarks/bench_ccx.py --kinds {kinds}`: the problems CalculiX users "
@@ -428,7 +428,7 @@ def chart(rows, machine) -> Path:
 
 
 def report(rows, machine, load_end, quick, figure) -> str:
-    from dolfinx_friction import calculix
+    from dolfinx_friction.reference import calculix
     out = [
         "`benchmarks/bench_ccx.py`" + (" --quick" if quick else "") + ": the scene of "
         "`bench_cost.py` (block on a foundation, C3D8 / Q4 faces, K = 50 E, mu = 0.3, press 1 + "
@@ -497,7 +497,7 @@ def main(argv=None) -> None:
     ap.add_argument("--kinds", help="comma-separated problem kinds instead of the block on a "
                     f"foundation: {', '.join(KINDS)} (--quick: the smallest size of each)")
     args = ap.parse_args(argv)
-    from dolfinx_friction import calculix
+    from dolfinx_friction.reference import calculix
     if not calculix.ccx_available():
         print("ccx not found (Debian: apt-get install calculix-ccx, or set $CCX)")
         return 1

@@ -14,9 +14,9 @@ Cases (scenes and meshes from ``tests/verification/test_calculix_nlgeom.py``):
 * ``ironing (full)``: the same on the demo's resolution (block 20 x 5, 120 x 24 cells, 40 faces
   on the die's arc), indented 25 %, dragged 1.5 in 12 increments.
 
-The very same :class:`~dolfinx_friction.model.Scene` is solved by dolfinx_friction (serial,
+The very same :class:`~dolfinx_friction.scene.model.Scene` is solved by dolfinx_friction (serial,
 MUMPS, after an untimed one-increment warm-up that compiles the forms) and written by
-:func:`dolfinx_friction.calculix.write_inp` for ``ccx`` (single-threaded; NLGEOM; the deck's
+:func:`dolfinx_friction.reference.calculix.write_inp` for ``ccx`` (single-threaded; NLGEOM; the deck's
 default tightened ``*CONTROLS``).  Per case: dofs, wall and CPU time of both (ccx CPU from
 ``RUSAGE_CHILDREN``), Newton iterations (ours) and factorisations (ccx: one per iteration),
 reactions every increment (``|R - R_ccx| / |R_ccx|``, the worst), for the ironing the
@@ -66,7 +66,7 @@ def figures(kind: str, reactions: dict) -> dict:
 
 
 def one_case(name: str, make, kind: str) -> dict:
-    from dolfinx_friction import calculix
+    from dolfinx_friction.reference import calculix
     scene = make()
     row = {"case": name}
     inp = B.work_dir("ccx_nlgeom") / (re.sub(r"\W+", "_", name).strip("_") + ".inp")
@@ -114,7 +114,7 @@ def _versus(small: float, finite: float) -> str:
 
 
 def report(rows, machine, load_end, quick) -> str:
-    from dolfinx_friction import calculix
+    from dolfinx_friction.reference import calculix
     out = [
         "`benchmarks/bench_ccx_nlgeom.py`" + (" --quick" if quick else "") + ": finite strain "
         "(Neo-Hookean bodies, `*STEP, NLGEOM`, `*HYPERELASTIC, NEO HOOKE`) against "
@@ -185,7 +185,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--no-results", action="store_true")
     args = ap.parse_args(argv)
-    from dolfinx_friction import calculix
+    from dolfinx_friction.reference import calculix
     if not calculix.ccx_available():
         print("ccx not found (Debian: apt-get install calculix-ccx, or set $CCX)")
         return 1

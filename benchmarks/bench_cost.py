@@ -69,7 +69,7 @@ def two_boxes_mesh(n: int) -> Path:
 def scene(n: int, contact: bool = True, slide_increments: int = 2, mu: float = MU):
     """The block on a foundation at resolution ``n`` (module docstring); ``mu = 0``:
     frictionless."""
-    from dolfinx_friction.model import BC, Body, ContactPair, Output, Scene, Step
+    from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Scene, Step
     return Scene(
         mesh=two_boxes_mesh(n), bodies=(Body("block", E, NU), Body("foundation", E, NU)),
         contacts=(ContactPair("block_bottom", "foundation_top", mu=mu, K="calculix",

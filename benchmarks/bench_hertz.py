@@ -22,7 +22,7 @@ space; the geometry stays first order), penalty ``K = k E / h`` with k = 1, 10, 
 
 Measured: the load ``P`` from the reaction on the pushed top (x2 in 2D, x4 in 3D for the full
 cylinder/sphere), the analytic Hertz ``a`` and ``p0`` for that load
-(:mod:`dolfinx_friction.analytic`), and from the solution
+(:mod:`dolfinx_friction.reference.analytic`), and from the solution
 
 * ``p0``: the nodal contact pressure ``F_N / A_p`` of the slave node at the first contact
   point (the origin);
@@ -99,7 +99,7 @@ def mesh_3d(n: int) -> Path:
 
 
 def scene(problem: str, n: int, degree: int, k: float):
-    from dolfinx_friction.model import BC, Body, ContactPair, Output, Rigid, Scene, Step
+    from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Rigid, Scene, Step
     h = A_NOMINAL / n
     out = Output(fields=False, contact_table=False,
                  reactions=("cylinder_top",) if problem == "2d" else ("sphere_top",))
@@ -124,8 +124,8 @@ def scene(problem: str, n: int, degree: int, k: float):
 # ----------------------------------------------------------------------------- measures
 def measure(result, problem: str) -> dict:
     """Load, Hertz reference and the measured p0 and a of a converged run."""
-    from dolfinx_friction.analytic import effective_modulus, hertz_line, hertz_sphere
-    from dolfinx_friction.surfaces import facet_nodes
+    from dolfinx_friction.reference.analytic import effective_modulus, hertz_line, hertz_sphere
+    from dolfinx_friction.fem.surfaces import facet_nodes
     p = result.problem
     d = p.gdim
     contact = p.scene.contacts[0]
@@ -297,7 +297,7 @@ def report(all_rows: dict, machine: dict, load_end: float, quick: bool, figures:
         "* time = CPU seconds of the whole `run()` of the single-threaded process (set-up "
         "included, mesh generation excluded); CPU rather than wall time because other jobs "
         "shared the 2 cores (the wall times, inflated by them, are in the tables).",
-        "* errors against Hertz for the measured load (`dolfinx_friction.analytic`) of the "
+        "* errors against Hertz for the measured load (`dolfinx_friction.reference.analytic`) of the "
         "nodal pressures p = F_N/A_p: **p0 fit, a fit** = p0 and a of the elliptic profile "
         "p^2 = p0^2 (1 - r^2/a^2) fitted by least squares to the closed nodes with "
         "p > 0.2 max p (as `demos/hertz_cylinder.py` does; nodes with < 5 % of the median "

@@ -46,7 +46,7 @@ QUICK_INCREMENTS = 4
 
 def demo_scene(name: str):
     """The demo's scene (None if the demo does not exist), its mesh built if missing."""
-    from dolfinx_friction.scene import load_scene
+    from dolfinx_friction.scene.toml import load_scene
     toml = B.DEMOS / f"{name}.toml"
     if not toml.exists() or not (B.DEMOS / f"{name}.py").exists():
         return None

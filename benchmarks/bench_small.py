@@ -16,17 +16,17 @@ Scenes (both 3D, first-order hexahedra, mu = 0.3, 1 press increment + 10 slide i
 * ``sliding_block`` -- the demo ``demos/sliding_block.toml`` as shipped (1,860 dofs).
 
 Each is written as a scene file (TOML + mesh) and as a CalculiX deck
-(:func:`dolfinx_friction.calculix.write_inp` of the same :class:`Scene`) in
+(:func:`dolfinx_friction.reference.calculix.write_inp` of the same :class:`Scene`) in
 ``$BENCH_WORK/small``.  Timed, alternately, each in a fresh process, as a user runs them:
 
 * ``ours``: ``python -m dolfinx_friction run scene.toml --quiet`` (all outputs: fields
   per increment, contact table, history, summary);
 * ``ours, no fields``: the same with ``--set output.fields=false``;
-* ``ours, cold mesh cache``: ``ours`` with an empty mesh cache (:mod:`dolfinx_friction.mesh_cache`:
+* ``ours, cold mesh cache``: ``ours`` with an empty mesh cache (:mod:`dolfinx_friction.io.mesh_cache`:
   gmsh reads the mesh); the other runs of ours find the mesh in a cache of their own
   (``$BENCH_WORK/small/mesh_cache``), as every run after a scene's first does;
 * ``ccx``: ``ccx -i deck`` (one thread, as ``calculix.run_ccx`` runs it);
-* the floors: ``python -c pass`` and ``python -c "import dolfinx_friction.api"``.
+* the floors: ``python -c pass`` and ``python -c "import dolfinx_friction.scene.runner"``.
 
 Wall time (``time.perf_counter``) and CPU time (``getrusage(RUSAGE_CHILDREN)``) of each
 command; the minimum over the repeats (the machine is shared: the minimum is the least
@@ -89,8 +89,8 @@ reactions = ["block_top", "foundation_bottom"]
 
 def prepare(name: str) -> Path:
     """Scene file, mesh and CalculiX deck of one scene in the work directory; the TOML."""
-    from dolfinx_friction import calculix
-    from dolfinx_friction.scene import load_scene
+    from dolfinx_friction.reference import calculix
+    from dolfinx_friction.scene.toml import load_scene
     d = B.work_dir("small") / name
     d.mkdir(parents=True, exist_ok=True)
     toml = d / f"{name}.toml"
@@ -113,7 +113,7 @@ def timed(cmd: list[str], cwd: Path, env: dict) -> tuple[float, float]:
 
 
 def measure(name: str, repeats: int) -> dict:
-    from dolfinx_friction import calculix
+    from dolfinx_friction.reference import calculix
     toml = prepare(name)
     d, py = toml.parent, B.PYTHON
     cold_cache = B.work_dir("small") / "mesh_cache_cold"
@@ -128,7 +128,7 @@ def measure(name: str, repeats: int) -> dict:
         "ours, cold mesh cache": (run, dict(env, DOLFINX_FRICTION_CACHE=str(cold_cache))),
         "ccx": ([calculix.ccx_executable(), "-i", name], ccx_env),
         "python -c pass": ([py, "-c", "pass"], env),
-        "import dolfinx_friction.api": ([py, "-c", "import dolfinx_friction.api"], env),
+        "import dolfinx_friction.scene.runner": ([py, "-c", "import dolfinx_friction.scene.runner"], env),
     }
     times: dict[str, list] = {k: [] for k in commands}
     load0 = B.load_average()
@@ -160,7 +160,7 @@ def report(rows: list[dict], machine: dict, repeats: int) -> str:
         p = r["phases"]
         newton = sum(p.get(k, 0.0) for k in ("contact_search", "contact_assembly",
                                              "bulk_assembly", "linear_solve"))
-        split.append([r["scene"], f"{r['wall']['import dolfinx_friction.api']:.2f}",
+        split.append([r["scene"], f"{r['wall']['import dolfinx_friction.scene.runner']:.2f}",
                       f"{p.get('setup', 0.0):.2f}", f"{newton:.2f}",
                       f"{p.get('output', 0.0):.2f}", f"{r['run_wall']:.2f}",
                       f"{r['newton']}"])

@@ -2,12 +2,12 @@
 
 Every demo is ``demos/<name>.py`` + ``demos/<name>.toml`` + the generated
 ``demos/<name>.msh``.  Its ``main()`` builds the mesh if it is missing (or with
-``--rebuild``), runs the scene through :func:`dolfinx_friction.api.run`
+``--rebuild``), runs the scene through :func:`dolfinx_friction.scene.runner.run`
 (:func:`command_line` and :func:`run_demo`), renders PNGs next to the results
 and prints the key numbers against the analytic reference.  The gmsh helpers
 of ``build_mesh`` are in ``_meshing`` (no pyvista there).
 
-Import order matters: pyvista (imported by ``dolfinx_friction.viz``) must be
+Import order matters: pyvista (imported by ``dolfinx_friction.viz.pictures``) must be
 loaded before dolfinx, so the demo scripts import this module first.
 """
 from __future__ import annotations
@@ -22,15 +22,15 @@ HERE = Path(__file__).resolve().parent
 if str(HERE.parent) not in sys.path:  # run from a checkout without installing
     sys.path.insert(0, str(HERE.parent))
 
-from dolfinx_friction import viz  # noqa: E402  (pyvista before dolfinx)
-from dolfinx_friction.postprocess import contact_state  # noqa: E402,F401  (for the demos)
+from dolfinx_friction.viz import pictures as viz  # noqa: E402  (pyvista before dolfinx)
+from dolfinx_friction.reference.compare import contact_state  # noqa: E402,F401  (for the demos)
 from mpi4py import MPI  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 if TYPE_CHECKING:
-    from dolfinx_friction.api import RunResult
-    from dolfinx_friction.solver import Increment
+    from dolfinx_friction.scene.runner import RunResult
+    from dolfinx_friction.scene.driver import Increment
 
 
 def parse_args(description: str, argv=None) -> argparse.Namespace:
@@ -61,8 +61,8 @@ def ensure_mesh(path: Path, build: Callable[..., None], rebuild: bool = False,
 
 def run_scene(scene: Path, args: argparse.Namespace):
     """Run a scene with the command-line overrides; returns (RunResult, seconds)."""
-    from dolfinx_friction.api import run
-    from dolfinx_friction.progress import Progress
+    from dolfinx_friction.scene.runner import run
+    from dolfinx_friction.cli.progress import Progress
     progress = Progress() if MPI.COMM_WORLD.rank == 0 and not args.quiet else None
     t0 = time.perf_counter()
     try:

@@ -9,7 +9,7 @@ Step 2 releases that point and applies a horizontal traction on the top whose
 resultant is ``Q = 0.5 mu P`` (``P`` = the normal load of step 1), in 5
 increments, keeping u_y.
 
-Reference (Johnson §7.1, :mod:`dolfinx_friction.analytic`): the contact
+Reference (Johnson §7.1, :mod:`dolfinx_friction.reference.analytic`): the contact
 half-width ``a`` is Hertz's; the central stick zone has the half-width
 ``c = a sqrt(1 - Q/(mu P))`` and the tangential traction is
 ``q(x) = mu p0 [sqrt(1 - x^2/a^2) - (c/a) sqrt(1 - x^2/c^2)]``.  The script
@@ -26,7 +26,7 @@ import _common as C  # noqa: F401  (pyvista before dolfinx)
 from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 import numpy as np
 
-from dolfinx_friction.analytic import (cattaneo_mindlin_stick_half_width,
+from dolfinx_friction.reference.analytic import (cattaneo_mindlin_stick_half_width,
                                        cattaneo_mindlin_traction, effective_modulus,
                                        hertz_line, hertz_line_pressure)
 

@@ -29,7 +29,7 @@ from dolfinx.io import XDMFFile, gmshio
 from mpi4py import MPI
 
 from dolfinx_friction import BlockProblem, NodeToSurface, Surface, rigid_plane, solve_steps
-from dolfinx_friction.compat import vector_space
+from dolfinx_friction._compat import vector_space
 
 parser = argparse.ArgumentParser()
 parser.add_argument("--cells", type=int, default=20, help="cells along the block's width")
@@ -106,7 +106,7 @@ solve_steps(problem, slide, 10, on_increment=reporter(1, "slide"))
 xdmf.close()
 
 if comm.size == 1 and pyvista is not None and not args.no_picture:
-    from dolfinx_friction.compat import vtk_mesh  # the deformed block, by contact status
+    from dolfinx_friction._compat import vtk_mesh  # the deformed block, by contact status
     grid = pyvista.UnstructuredGrid(*vtk_mesh(V))
     grid.points[:, :2] += u.x.array.reshape(-1, 2)
     grid.point_data["status"] = contact.fields()["contact_status"].x.array

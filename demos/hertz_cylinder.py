@@ -7,7 +7,7 @@ contact, the cylinder (slave) about twice as finely as the block (master).
 The flat top of the quarter disk is pushed down by 0.25 in 4 increments,
 frictionless.
 
-Reference (Johnson §4.3, :func:`dolfinx_friction.analytic.hertz_line`): with
+Reference (Johnson §4.3, :func:`dolfinx_friction.reference.analytic.hertz_line`): with
 the load per unit length of the whole cylinder ``P = 2 |R_top_y|``,
 ``a = sqrt(4 P R / (pi E*))`` and ``p0 = 2 P / (pi a)``, ``1/E* = 2 (1-nu^2)/E``.
 The script fits the elliptic profile ``p^2 = p0^2 (1 - x^2/a^2)`` to the nodal
@@ -25,7 +25,7 @@ import _common as C  # noqa: F401  (pyvista before dolfinx)
 from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 import numpy as np
 
-from dolfinx_friction.analytic import (effective_modulus, fit_elliptic, hertz_line,
+from dolfinx_friction.reference.analytic import (effective_modulus, fit_elliptic, hertz_line,
                                        hertz_line_pressure)
 
 SCENE = C.HERE / "hertz_cylinder.toml"

@@ -10,7 +10,7 @@ frictionless.
 * ``hertz_sphere_block.toml``: on a quarter block (20 x 20 x 10, same
   material, symmetry on x = 0, y = 0, bottom fixed), approach 0.3.
 
-Reference (Johnson §4.2, :func:`dolfinx_friction.analytic.hertz_sphere`): with
+Reference (Johnson §4.2, :func:`dolfinx_friction.reference.analytic.hertz_sphere`): with
 the total force ``F = 4 |R_top_z|``, ``a = (3 F R / (4 E*))^(1/3)`` and
 ``p0 = 3 F / (2 pi a^2)``; ``1/E* = (1-nu^2)/E`` on the rigid plane and
 ``2 (1-nu^2)/E`` on the block.  The script prints the largest nodal pressure
@@ -27,7 +27,7 @@ import _common as C  # noqa: F401  (pyvista before dolfinx)
 from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 import numpy as np
 
-from dolfinx_friction.analytic import (effective_modulus, fit_elliptic, hertz_sphere,
+from dolfinx_friction.reference.analytic import (effective_modulus, fit_elliptic, hertz_sphere,
                                        hertz_sphere_pressure)
 
 SCENE = C.HERE / "hertz_sphere.toml"

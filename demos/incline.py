@@ -9,7 +9,7 @@ the top horizontally by 0.5 (10 increments), ``u_y`` still free and the load
 still on, until every contact node slips up the slope.
 
 Reference (statics of a block on a rough incline, see
-:func:`dolfinx_friction.analytic.incline_push_ratio`): in full slip the
+:func:`dolfinx_friction.reference.analytic.incline_push_ratio`): in full slip the
 horizontal push over the vertical load is ``H/V = (tan a + mu)/(1 - mu tan a)``.
 
     python demos/incline.py
@@ -23,7 +23,7 @@ from pathlib import Path
 import _common as C  # noqa: F401  (pyvista before dolfinx)
 from demos import _meshing as G  # gmsh helpers, after _common (it puts the root on sys.path)
 
-from dolfinx_friction.analytic import incline_push_ratio, incline_hold_ratio
+from dolfinx_friction.reference.analytic import incline_push_ratio, incline_hold_ratio
 
 SCENE = C.HERE / "incline.toml"
 MESH = C.HERE / "incline.msh"

@@ -16,6 +16,9 @@ form or element) is dropped, unless the ``dolfinx_friction`` logger is enabled f
 import logging
 import re
 
+from dolfinx_friction import _moved
+from dolfinx_friction._lazy import lazy_names
+
 __version__ = "0.1.0"
 
 
@@ -33,23 +36,16 @@ logging.getLogger(__name__).addHandler(logging.NullHandler())
 logging.getLogger().addFilter(_CompilerChatter())
 
 _PUBLIC = {
-    "NodeToSurface": "pair", "Surface": "pair", "ContactState": "pair",
-    "ContactSetupError": "pair", "rigid_plane": "pair", "rigid_sphere": "pair",
-    "rigid_cylinder": "pair", "create_matrix": "pair", "NO_ELEMENT": "pair",
-    "BlockProblem": "system", "Newton": "newton", "NewtonTrace": "newton",
-    "snes_solve": "newton", "solve_steps": "stepping", "IncrementRecord": "stepping",
-    "ConvergenceError": "stepping",
+    "NodeToSurface": "fem.node_to_surface", "Surface": "fem.node_to_surface",
+    "ContactState": "fem.node_to_surface", "ContactSetupError": "fem.node_to_surface",
+    "rigid_plane": "fem.node_to_surface", "rigid_sphere": "fem.node_to_surface",
+    "rigid_cylinder": "fem.node_to_surface", "create_matrix": "fem.node_to_surface",
+    "NO_ELEMENT": "fem.node_to_surface", "BlockProblem": "fem.block_problem",
+    "Newton": "nls.newton", "NewtonTrace": "nls.newton", "snes_solve": "nls.newton",
+    "solve_steps": "nls.stepping", "IncrementRecord": "nls.stepping",
+    "ConvergenceError": "nls.stepping",
     "Linear": "contact.laws", "Exponential": "contact.laws", "Tabular": "contact.laws",
 }
 __all__ = sorted(_PUBLIC)
-
-
-def __getattr__(name: str):
-    if name not in _PUBLIC:
-        raise AttributeError(f"module 'dolfinx_friction' has no attribute {name!r}")
-    import importlib
-    return getattr(importlib.import_module(f"dolfinx_friction.{_PUBLIC[name]}"), name)
-
-
-def __dir__():
-    return sorted(list(globals()) + __all__)
+__getattr__, __dir__ = lazy_names(__name__, _PUBLIC)
+_moved.install()

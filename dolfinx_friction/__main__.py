@@ -1,3 +1,3 @@
-from dolfinx_friction.cli import main
+from dolfinx_friction.cli.frontend import main
 
 raise SystemExit(main())

@@ -16,11 +16,11 @@ class OutputError(OSError):
 # (module, class) of the errors that blame the input.  Looked up in sys.modules
 # rather than imported: an exception of a module that was never imported cannot
 # be raised, and a bad scene is then answered without importing dolfinx.
-_INPUT_ERRORS = (("dolfinx_friction.validation", "SceneError"),
-                 ("dolfinx_friction.gmsh_io", "MeshError"),
-                 ("dolfinx_friction.problem", "ModelError"),
+_INPUT_ERRORS = (("dolfinx_friction.scene.validation", "SceneError"),
+                 ("dolfinx_friction.io.gmsh", "MeshError"),
+                 ("dolfinx_friction.scene.build", "ModelError"),
                  ("dolfinx_friction.errors", "OutputError"))
-_DIVERGED_ERRORS = (("dolfinx_friction.solver", "ConvergenceError"),)
+_DIVERGED_ERRORS = (("dolfinx_friction.scene.driver", "ConvergenceError"),)
 
 
 def _is(exc: BaseException, classes) -> bool:

@@ -1,4 +1,4 @@
-"""Solve a scene and render it with dolfinx_friction.viz (a smoke test of the pyvista path).
+"""Solve a scene and render it with dolfinx_friction.viz.pictures (a smoke test of the pyvista path).
 
     python3 render.py SCENE.toml OUT_DIR
 
@@ -8,8 +8,8 @@ Debian 13's python3-vtk9.  Exits 1 when no picture was written.
 import sys
 from pathlib import Path
 
-from dolfinx_friction import viz  # noqa: I001  (pyvista before dolfinx)
-from dolfinx_friction.api import run
+from dolfinx_friction.viz import pictures as viz  # noqa: I001  (pyvista before dolfinx)
+from dolfinx_friction.scene.runner import run
 
 scene, out = Path(sys.argv[1]), Path(sys.argv[2])
 result = run(scene, out=out)

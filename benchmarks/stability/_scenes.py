@@ -256,7 +256,7 @@ def _contact(case: dict, slave: str, master: str, h: float, E_slave: float, mu: 
     """The contact pair of a case: K and the stick slope given as multiples of E_slave / h;
     without ``lam`` the stick slope of the maps, CalculiX's E/2 (the default before
     scene-format version 2)."""
-    from dolfinx_friction.model import ContactPair
+    from dolfinx_friction.scene.model import ContactPair
     k = case.get("k", 10.0)
     lam = case.get("lam")
     pi = case.get("pairing", 8)
@@ -281,7 +281,7 @@ def block_scene(case: dict):
     master faces; else ``increments``), ``press_increments`` (1), ``k``, ``lam``, ``mu``
     (0.3), ``tangent``, ``pairing``, ``line_search``, ``max_cutbacks``.
     """
-    from dolfinx_friction.model import BC, Body, Scene, Step
+    from dolfinx_friction.scene.model import BC, Body, Scene, Step
     n = int(case.get("n_slave", 8))
     ratio = float(case.get("ratio", 1.0))
     h_s = BLOCK_W / n
@@ -318,7 +318,7 @@ def hertz_scene(case: dict):
     ``swap``: the block top is the slave and the (coarser) cylinder the master -- a
     faceted convex master, the textbook source of face-to-face chattering.
     """
-    from dolfinx_friction.scene import load_scene
+    from dolfinx_friction.scene.toml import load_scene
     demo = demo_module("hertz_cylinder")
     h = float(case.get("h", 0.2))
     ratio = float(case.get("ratio", 0.5))
@@ -354,7 +354,7 @@ def ironing_scene(case: dict):
     demo = demo_module("ironing")
     kw = _step_kw(case)
     if demo is not None and (DEMOS / "ironing.toml").exists():
-        from dolfinx_friction.scene import load_scene
+        from dolfinx_friction.scene.toml import load_scene
         base = load_scene(DEMOS / "ironing.toml")
         params = dict(nx=int(case.get("nx", 40)), ny=int(case.get("ny", 8)))
         accepted = inspect.signature(demo.build_mesh).parameters
@@ -391,7 +391,7 @@ def ironing_scene(case: dict):
                  replace(drag, increments=increments, **kw))
         info.update(h=h, h_master=h_master, increments=increments, source="demos/ironing.py")
         return replace(base, mesh=mesh, contacts=(pair,), steps=steps), info
-    from dolfinx_friction.model import BC, Body, Scene, Step
+    from dolfinx_friction.scene.model import BC, Body, Scene, Step
     h = float(case.get("h", 0.1))
     ratio = float(case.get("ratio", 1.0))
     mesh = cached_mesh("ironing", build_ironing, h_slave=h, ratio=ratio)
@@ -412,7 +412,7 @@ def ironing_scene(case: dict):
 
 def block3d_scene(case: dict):
     """The 3D sliding block demo, coarse (3 x 3 slave faces on 6 x 3 master faces)."""
-    from dolfinx_friction.scene import load_scene
+    from dolfinx_friction.scene.toml import load_scene
     demo = demo_module("sliding_block")
     mesh = cached_mesh("block3d", demo.build_mesh, n_block=int(case.get("n_block", 3)),
                        n_found=(6, 3), layers=(1, 1))
@@ -431,7 +431,7 @@ def groove_scene(case: dict):
     """The convex tip pressed 0.005 into the concave V-groove (:func:`build_groove`);
     ``increments`` (1), ``k``, ``mu`` (0), ``pairing``, ... (tests/verification/
     test_stability.py pins the chattering it shows)."""
-    from dolfinx_friction.model import BC, Body, Scene, Step
+    from dolfinx_friction.scene.model import BC, Body, Scene, Step
     h = 0.0625
     mesh = cached_mesh("groove", build_groove, h=h)
     kw = _step_kw(case)
@@ -495,7 +495,7 @@ def _measures(family: str, case: dict, info: dict, incs: list, problem) -> dict:
             out["Fn_osc"] = (max(fns) - min(fns)) / (sum(fns) / len(fns))
     if family == "hertz":
         from mpi4py import MPI
-        from dolfinx_friction.analytic import effective_modulus, hertz_line
+        from dolfinx_friction.reference.analytic import effective_modulus, hertz_line
         _, p0 = hertz_line(2.0 * fn[-1], 10.0, effective_modulus(E, NU, E, NU))
         state = problem.pair_of(problem.scene.contacts[0]).state()
         p = state.pressure[state.has_element]
@@ -510,13 +510,13 @@ def run_case(case: dict) -> dict:
     ``status``: ``ok`` (converged, no cutback), ``cutback`` (converged after cutbacks),
     ``failed`` (ConvergenceError after all cutbacks), ``error`` (anything else: a bug).
     A converged run with ``lost`` set accepted an increment without its contact (see
-    :func:`_measures`).  The solver is driven as :func:`dolfinx_friction.api.run` drives it
+    :func:`_measures`).  The solver is driven as :func:`dolfinx_friction.scene.runner.run` drives it
     (same observer, same penetration criterion), so that a failed run still reports its
     iterations.
     """
-    from dolfinx_friction.api import PENETRATION_WARNING
-    from dolfinx_friction.problem import ContactProblem
-    from dolfinx_friction.solver import ConvergenceError, Solver
+    from dolfinx_friction.scene.runner import PENETRATION_WARNING
+    from dolfinx_friction.scene.build import ContactProblem
+    from dolfinx_friction.scene.driver import ConvergenceError, Solver
     out = dict(case)
     t0 = time.perf_counter()
     incs: list = []

@@ -832,7 +832,7 @@ def test_rerun_replaces_results(workdir):
 
 def mpirun_cli(ranks: int, *args: Any) -> Outcome:
     """The command line under ``mpirun -n ranks`` (oversubscribed)."""
-    from dolfinx_friction import compat  # Open MPI 4 (Debian 12) / 5 (Debian 13) launchers
+    from dolfinx_friction import _compat as compat  # Open MPI 4 (Debian 12) / 5 (Debian 13) launchers
     command = [*compat.mpirun_command(ranks), sys.executable, "-m", "dolfinx_friction",
                *map(str, args)]
     env = compat.mpirun_environment(cli_env())

@@ -31,7 +31,7 @@ LINE = re.compile(r"(press|slide) t = +([\d.]+) +Newton (\d+) +F_n = +(\S+) +F_t
 
 def _run(ranks: int, out: Path) -> np.ndarray:
     """(increments, 3): F_n, F_t and F_t/F_n printed for every increment."""
-    from dolfinx_friction import compat
+    from dolfinx_friction import _compat as compat
     command = [sys.executable, str(DEMO), "--cells", "12", "--no-picture", "--out", str(out)]
     env = cli_env()
     if ranks == 1:  # a fresh JIT cache: the forms and elements are compiled in this run

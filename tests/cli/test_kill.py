@@ -1,7 +1,7 @@
 """A run killed with SIGKILL leaves the increments already written complete and readable;
 one stopped by SIGINT / SIGTERM, or by a full disk, says so in one line.
 
-The guarantee (documented in ``dolfinx_friction/output.py``): per increment the
+The guarantee (documented in ``dolfinx_friction/io/writer.py``): per increment the
 rows of ``contact.csv`` are written first, then the field folder, then the row
 of ``history.csv``.  After a kill
 
@@ -44,7 +44,7 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
-from dolfinx_friction import compat
+from dolfinx_friction import _compat as compat
 from tests import meshes
 from tests.cli.test_outputs import series_grids
 

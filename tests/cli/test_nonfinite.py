@@ -21,10 +21,10 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from dolfinx_friction import newton as newton_module
-from dolfinx_friction.api import run
-from dolfinx_friction.scene import load_scene
-from dolfinx_friction.solver import ConvergenceError
+from dolfinx_friction.nls import newton as newton_module
+from dolfinx_friction.scene.runner import run
+from dolfinx_friction.scene.toml import load_scene
+from dolfinx_friction.scene.driver import ConvergenceError
 from tests import meshes
 from tests.cli.test_cli import GOOD, RIGID, edited, toml_dumps
 

@@ -19,7 +19,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dolfinx_friction.errors import EXIT_INPUT, classify
-from dolfinx_friction.model import (
+from dolfinx_friction.scene.model import (
     BC,
     Body,
     ContactPair,
@@ -30,7 +30,7 @@ from dolfinx_friction.model import (
     Scene,
     Step,
 )
-from dolfinx_friction.scene import (
+from dolfinx_friction.scene.toml import (
     SceneError,
     apply_override,
     default_output_dir,

@@ -11,10 +11,10 @@ from __future__ import annotations
 import pytest
 from scipy.optimize import brentq
 
-from dolfinx_friction.api import run
-from dolfinx_friction.model import BC, Body, ContactPair, Load, Rigid, Scene, Step
-from dolfinx_friction.postprocess import contact_state
-from dolfinx_friction.scene import SceneError, parse_scene
+from dolfinx_friction.scene.runner import run
+from dolfinx_friction.scene.model import BC, Body, ContactPair, Load, Rigid, Scene, Step
+from dolfinx_friction.reference.compare import contact_state
+from dolfinx_friction.scene.toml import SceneError, parse_scene
 from tests import meshes
 from tests.cli.test_scene import edited, put
 from tests.verification.test_finite_strain import E, NU, nominal_stress

@@ -134,7 +134,7 @@ def test_sweep_bad_scene_and_mpirun_one_line(workdir):
 
 
 def test_split_values():
-    from dolfinx_friction.sweep import split_values
+    from dolfinx_friction.cli.sweep import split_values
     assert split_values("0.1, 0.2,0.3") == ["0.1", "0.2", "0.3"]
     assert split_values("[0,0,-1],[0, 0, -2]") == ["[0,0,-1]", "[0, 0, -2]"]
     assert split_values('"a,b",\'c,d\',{x = [1,2]}') == ['"a,b"', "'c,d'", "{x = [1,2]}"]

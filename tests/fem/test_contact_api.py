@@ -17,7 +17,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction import (BlockProblem, ContactSetupError, Newton, NodeToSurface, Surface,
                               create_matrix, rigid_plane, snes_solve, solve_steps)
-from dolfinx_friction import compat
+from dolfinx_friction import _compat as compat
 
 E, NU = 1000.0, 0.3
 BOTTOM, TOP = 1, 2
@@ -215,7 +215,7 @@ def test_snes_matches_newton():
 
 
 def test_own_newton_loop_matches_solve_steps():
-    """The loop of the module docstring of dolfinx_friction.pair, written by hand with
+    """The loop of the module docstring of dolfinx_friction.fem.node_to_surface, written by hand with
     dolfinx's own assemblers on u.vector, gives what solve_steps gives."""
     problem, contact = on_plane()
     press_and_slide(problem, contact, slide=0.0, increments=(1, 1))  # no predictor

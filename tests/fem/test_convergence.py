@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from dolfinx_friction import Newton
-from dolfinx_friction.api import run
-from dolfinx_friction.model import Step
-from dolfinx_friction.scene import SceneError, load_scene
+from dolfinx_friction.scene.runner import run
+from dolfinx_friction.scene.model import Step
+from dolfinx_friction.scene.toml import SceneError, load_scene
 
 DEMOS = Path(__file__).resolve().parents[2] / "demos"
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dolfinx_friction.api import run
-from dolfinx_friction.model import BC, Body, ContactPair, Rigid, Scene, Step
+from dolfinx_friction.scene.runner import run
+from dolfinx_friction.scene.model import BC, Body, ContactPair, Rigid, Scene, Step
 from tests import meshes
 
 

@@ -1,4 +1,4 @@
-"""dolfinx_friction.gmsh_io: Gmsh meshes -> one dolfinx mesh per body.
+"""dolfinx_friction.io.gmsh: Gmsh meshes -> one dolfinx mesh per body.
 
 Runs serially and under ``mpirun -n 2``: Gmsh models are built on rank 0
 only (files go to a directory broadcast from rank 0); every rank calls
@@ -24,8 +24,8 @@ import dolfinx.fem  # noqa: E402
 import dolfinx.mesh  # noqa: E402
 import ufl  # noqa: E402
 
-from dolfinx_friction import compat  # noqa: E402
-from dolfinx_friction.gmsh_io import (  # noqa: E402
+from dolfinx_friction import _compat as compat  # noqa: E402
+from dolfinx_friction.io.gmsh import (  # noqa: E402
     BodyMesh, MeshError, MeshSet, _gmsh_initialized, load_mesh)
 
 comm = MPI.COMM_WORLD
@@ -656,7 +656,7 @@ def mesh_digest(ms: MeshSet) -> dict:
 
 _READ_TWICE = """
 import json, sys
-from dolfinx_friction.gmsh_io import load_mesh
+from dolfinx_friction.io.gmsh import load_mesh
 ms = load_mesh(sys.argv[1], ["lower", "upper"])
 print(json.dumps({"gmsh": "gmsh" in sys.modules, "groups": ms.group_bodies,
                   "x": {n: b.mesh.geometry.x.tolist() for n, b in ms.bodies.items()},

@@ -8,14 +8,14 @@ import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from dolfinx_friction.api import run
-from dolfinx_friction.assembly import CooPattern
+from dolfinx_friction.scene.runner import run
+from dolfinx_friction.fem.pattern import CooPattern
 from dolfinx_friction.contact.shapes import face_areas
-from dolfinx_friction.model import (BC, Body, ContactPair, Load, Rigid, RigidMotion, Scene,
+from dolfinx_friction.scene.model import (BC, Body, ContactPair, Load, Rigid, RigidMotion, Scene,
                                     Step)
-from dolfinx_friction.problem import ContactProblem
-from dolfinx_friction.solver import Solver
-from dolfinx_friction.surfaces import SlaveNodes, master_faces
+from dolfinx_friction.scene.build import ContactProblem
+from dolfinx_friction.scene.driver import Solver
+from dolfinx_friction.fem.surfaces import SlaveNodes, master_faces
 from tests import meshes
 
 
@@ -138,8 +138,8 @@ def test_global_jacobian_matches_finite_differences(shared_dir, mu, model):
 def test_rigid_body_modes_span_the_kernel_of_the_bulk_stiffness(shared_dir):
     """The near null space given to multigrid: orthonormal, and each body's stiffness maps
     its part of each mode to round-off."""
-    from dolfinx_friction import compat
-    from dolfinx_friction.problem import elastic_forms
+    from dolfinx_friction import _compat as compat
+    from dolfinx_friction.scene.build import elastic_forms
     mesh = meshes.two_boxes(shared_dir / "boxes.msh")
     problem = ContactProblem(_boxes_scene(mesh))
     modes = problem.rigid_body_modes().getVecs()

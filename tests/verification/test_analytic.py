@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dolfinx_friction.analytic import (cattaneo_mindlin_stick_half_width, effective_modulus,
+from dolfinx_friction.reference.analytic import (cattaneo_mindlin_stick_half_width, effective_modulus,
                                        fit_elliptic, hertz_line, hertz_sphere,
                                        incline_push_ratio)
-from dolfinx_friction.api import run
-from dolfinx_friction.postprocess import contact_state, stick_half_width
+from dolfinx_friction.scene.runner import run
+from dolfinx_friction.reference.compare import contact_state, stick_half_width
 
 DEMOS = Path(__file__).resolve().parents[2] / "demos"
 E, NU, R = 1000.0, 0.3, 10.0

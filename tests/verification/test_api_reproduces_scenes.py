@@ -18,8 +18,9 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from dolfinx_friction import BlockProblem, NodeToSurface, Surface, rigid_plane, solve_steps
-from dolfinx_friction import compat, gmsh_io
-from dolfinx_friction.api import run
+from dolfinx_friction import _compat as compat
+from dolfinx_friction.io import gmsh as gmsh_io
+from dolfinx_friction.scene.runner import run
 
 DEMOS = Path(__file__).resolve().parents[2] / "demos"
 

@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dolfinx_friction.api import run
+from dolfinx_friction.scene.runner import run
 from dolfinx_friction.contact.laws import Linear
-from dolfinx_friction.model import BC, Body, ContactPair, Load, Rigid, Scene, Step
-from dolfinx_friction.postprocess import contact_state
+from dolfinx_friction.scene.model import BC, Body, ContactPair, Load, Rigid, Scene, Step
+from dolfinx_friction.reference.compare import contact_state
 from tests import meshes
 
 E, NU = 1000.0, 0.3

@@ -2,7 +2,7 @@
 
 The same 3D problem -- mesh, bodies, laws, parameters, steps and increments --
 is solved by dolfinx_friction and by ``ccx`` on a deck written by
-:func:`dolfinx_friction.calculix.write_inp`; the reaction sums must agree
+:func:`dolfinx_friction.reference.calculix.write_inp`; the reaction sums must agree
 within 1 % in every increment.
 
 The problem: an elastic block (first-order hexahedra or tetrahedra) pressed
@@ -46,8 +46,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from dolfinx_friction import calculix
-from dolfinx_friction.model import BC, Body, Load, Rigid, Scene, Step
+from dolfinx_friction.reference import calculix
+from dolfinx_friction.scene.model import BC, Body, Load, Rigid, Scene, Step
 
 comm = MPI.COMM_WORLD
 ROOT = comm.rank == 0
@@ -211,8 +211,8 @@ def _compare(increments, ccx: dict) -> tuple[list[str], float]:
 @pytest.mark.parametrize("cells, mu", [("hex", 0.0), ("hex", 0.3), ("tet", 0.3)])
 def test_block_on_foundation_matches_calculix(shared_dir, cells, mu):
     """Press (2 increments), slide (4): reactions within 1 % of CalculiX's in every increment."""
-    from dolfinx_friction.api import run
-    from dolfinx_friction.scene import load_scene
+    from dolfinx_friction.scene.runner import run
+    from dolfinx_friction.scene.toml import load_scene
 
     _blocks_mesh(shared_dir / "blocks.msh", tets=cells == "tet")
     scene = load_scene(_scene_toml(shared_dir, mu))

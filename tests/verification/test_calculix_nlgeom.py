@@ -2,7 +2,7 @@
 
 The same 3D problem -- mesh, bodies, laws, parameters, steps and increments --
 is solved by dolfinx_friction and by ``ccx`` on the deck that
-:func:`dolfinx_friction.calculix.write_inp` writes for it: NLGEOM on every
+:func:`dolfinx_friction.reference.calculix.write_inp` writes for it: NLGEOM on every
 step, ``*HYPERELASTIC, NEO HOOKE`` with ``C10 = mu/2``, ``D1 = 2/kappa`` for the
 Neo-Hookean body.  CalculiX applies NLGEOM to the whole model, so the stiff
 ``"linear"`` body is Saint Venant-Kirchhoff there; with it declared
@@ -59,8 +59,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from dolfinx_friction import calculix
-from dolfinx_friction.model import BC, Body, ContactPair, Output, Scene, Step
+from dolfinx_friction.reference import calculix
+from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Scene, Step
 
 from .test_calculix import _blocks_mesh, _compare
 
@@ -85,7 +85,7 @@ def _ccx(scene: Scene, inp) -> calculix.CcxRun:
 
 def _ours_and_ccx(scene: Scene, inp):
     """(our run, ccx's run, our wall time): both codes on the scene, same increments."""
-    from dolfinx_friction.api import run
+    from dolfinx_friction.scene.runner import run
     ccx = _ccx(scene, inp)
     t0 = time.perf_counter()
     result = run(scene, write=False)
@@ -323,7 +323,7 @@ def test_saint_venant_kirchhoff_press_and_shear_matches_calculix(tmp_path):
     CalculiX), pressed by 10 % of its height and sheared by 0.03 (4 + 4 increments):
     reactions within 1e-3 of CalculiX's in every increment (measured 2.8e-4).  At 30 % ccx
     stops in the press ("solution seems to diverge", 4 or 8 increments)."""
-    from dolfinx_friction.api import run
+    from dolfinx_friction.scene.runner import run
 
     scene = press_shear_scene(_blocks_mesh(tmp_path / "blocks.msh"), "saint-venant-kirchhoff",
                               depth=0.1 * 0.25, shear=0.03, shear_increments=4)

@@ -17,10 +17,10 @@ import pytest
 import ufl
 from scipy.optimize import brentq
 
-from dolfinx_friction.api import run
-from dolfinx_friction.solver import ConvergenceError
-from dolfinx_friction.model import BC, Body, ContactPair, Output, Rigid, Scene, Step
-from dolfinx_friction.postprocess import contact_state
+from dolfinx_friction.scene.runner import run
+from dolfinx_friction.scene.driver import ConvergenceError
+from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Rigid, Scene, Step
+from dolfinx_friction.reference.compare import contact_state
 from tests import meshes
 
 E, NU = 1000.0, 0.3
@@ -88,8 +88,8 @@ def test_rigid_rotation_changes_no_stress_invariant(comm):
     unchanged, to 1e-10 of their size."""
     from dolfinx import fem, mesh
 
-    from dolfinx_friction import compat
-    from dolfinx_friction.problem import deformation_gradient, strain_energy
+    from dolfinx_friction import _compat as compat
+    from dolfinx_friction.scene.build import deformation_gradient, strain_energy
     domain = mesh.create_rectangle(comm, [[0.0, 0.0], [1.0, 0.5]], [4, 2],
                                    mesh.CellType.quadrilateral)
     V = compat.vector_space(domain, 1)

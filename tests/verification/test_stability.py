@@ -35,10 +35,10 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from dolfinx_friction.api import PENETRATION_WARNING, run
-from dolfinx_friction.model import (BC, Body, ContactPair, Output, Rigid, RigidMotion, Scene,
+from dolfinx_friction.scene.runner import PENETRATION_WARNING, run
+from dolfinx_friction.scene.model import (BC, Body, ContactPair, Output, Rigid, RigidMotion, Scene,
                                     Step)
-from dolfinx_friction.solver import ConvergenceError
+from dolfinx_friction.scene.driver import ConvergenceError
 from tests import meshes
 
 DEMOS = Path(__file__).resolve().parents[2] / "demos"
@@ -370,7 +370,7 @@ def _lost_zone_scene(shared_dir) -> Scene:
     increment, plain Newton (the maps' ironing_stick_mu cell)."""
     from dataclasses import replace
 
-    from dolfinx_friction.scene import load_scene
+    from dolfinx_friction.scene.toml import load_scene
     base = load_scene(DEMOS / "ironing.toml")
     h, E_block = 20.0 / 40, 10.0
     pair = replace(base.contacts[0], K=10 * E_block / h, stick_slope=10 * E_block / h, mu=1.0)
@@ -401,7 +401,7 @@ def test_warm_started_pairing_pairs_as_from_the_centroids(shared_dir, monkeypatc
     elements and lost nodes that projections from the face centroids give, xi to round-off."""
     import copy
 
-    from dolfinx_friction.interaction import ContactInteraction
+    from dolfinx_friction.fem.pairing import ContactInteraction
     warm, pairings = ContactInteraction.pair, []
 
     def pair_twice(self, u, iteration):

@@ -33,8 +33,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 import _scenes  # noqa: E402
-from dolfinx_friction.api import run  # noqa: E402
-from dolfinx_friction.solver import ConvergenceError  # noqa: E402
+from dolfinx_friction.scene.runner import run  # noqa: E402
+from dolfinx_friction.scene.driver import ConvergenceError  # noqa: E402
 
 for tangent in ("consistent", "calculix"):
     print(f"--- tangent = {tangent}")

@@ -22,7 +22,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 import _scenes  # noqa: E402
-from dolfinx_friction.api import run  # noqa: E402
+from dolfinx_friction.scene.runner import run  # noqa: E402
 
 scene, _ = _scenes.block_scene({"gap": -0.5, "press_increments": 4, "slide": 0, "k": 10})
 result = run(scene, write=False)

@@ -31,7 +31,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 import _scenes  # noqa: E402
-from dolfinx_friction.api import run  # noqa: E402
+from dolfinx_friction.scene.runner import run  # noqa: E402
 
 scene, info = _scenes.ironing_scene({"pairing": 1, "slide_faces": 0.5})
 result = run(scene, write=False)

@@ -29,8 +29,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 import _scenes  # noqa: E402
-from dolfinx_friction.problem import ContactProblem  # noqa: E402
-from dolfinx_friction.solver import ConvergenceError, Solver  # noqa: E402
+from dolfinx_friction.scene.build import ContactProblem  # noqa: E402
+from dolfinx_friction.scene.driver import ConvergenceError, Solver  # noqa: E402
 
 scene, _ = _scenes.block3d_scene({"k": 0.01, "increments": 10})
 problem = ContactProblem(scene)

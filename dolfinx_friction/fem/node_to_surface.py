@@ -1,0 +1,760 @@
+"""Node-to-surface contact as a piece of a FEniCSx script's own problem.
+
+A :class:`NodeToSurface` couples the slave nodes of a facet set of one body with the
+master faces of a facet set of another body, or with an analytic rigid obstacle
+(:func:`rigid_plane`, :func:`rigid_sphere`, :func:`rigid_cylinder`).  It reads the
+user's displacement vector and adds the contact forces and their exact tangent into the
+user's PETSc residual and Jacobian, in the numbering of the user's system:
+
+* one vector space ``V``: dolfinx's own numbering of ``V`` (``u.vector``);
+* several spaces ``[V_0, V_1, ...]`` (``spaces=``): the blocks joined as dolfinx's block
+  assemblers join them (on each rank, the owned dofs of ``V_0``, then of ``V_1``, ...).
+
+One increment of a load-stepping loop::
+
+    contact.begin(x)                    # converged state: search candidates, checkpoint
+    A = create_matrix(a, [contact])     # sparsity of the form plus the contact couplings
+    for each Newton iterate x:
+        contact.update(x)               # pair slave nodes with faces, evaluate elements
+        ...assemble the bodies' residual into b...;  contact.add_residual(b, bcs)
+        ...assemble their Jacobian into A...;        contact.add_jacobian(A, bcs)
+    contact.commit()                    # or contact.rollback() before a smaller increment
+
+Dirichlet rows are left as dolfinx makes them: the contact adds nothing to the rows and
+columns of the dofs of ``bcs``.  Units are the user's (force, length); a penalty ``K``
+is a pressure per length.
+"""
+from __future__ import annotations
+
+import uuid
+from dataclasses import asdict, dataclass
+from typing import Optional, Sequence, Union
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx_friction import _compat as compat
+from dolfinx_friction.contact.element import ContactParameters
+from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
+from dolfinx_friction.fem.numbering import BodyField, DofLayout
+from dolfinx_friction.io.gmsh import BodyMesh
+from dolfinx_friction.fem.pairing import ContactInteraction, RigidMaster
+from dolfinx_friction.scene.model import CALCULIX, Body, ContactPair, Rigid
+from dolfinx_friction.scene.validation import SceneError, modulus
+from dolfinx_friction.fem.surfaces import SlaveNodes, master_faces
+
+NO_ELEMENT = -1  #: status of a slave node without a contact element (far from the master)
+#: the attribute of a PETSc matrix that records which pairs' couplings its pattern holds
+_MATRIX_ATTR = "dolfinx_friction_couplings"
+
+
+def make_law(pair: ContactPair) -> Law:
+    """The pressure-overclosure law of a scene pair (defaults resolved)."""
+    if pair.law == "exponential":
+        return Exponential(pair.c0, pair.p0)
+    if pair.law == "tabular":
+        p, d = zip(*pair.table)
+        return Tabular(tuple(p), tuple(d))
+    return Linear(pair.K, pair.sigma_inf, pair.c0)
+
+
+class ContactSetupError(ValueError):
+    """A contact pair that cannot be built from what it was given (one-line message)."""
+
+
+@dataclass(frozen=True)
+class Surface:
+    """Facets of one body: those of ``tags`` (facet MeshTags of ``V.mesh``) equal to
+    ``value``, on the vector Lagrange space ``V`` of the body's displacement."""
+
+    V: object
+    tags: object
+    value: int
+
+    @property
+    def label(self) -> str:
+        return f"facets tagged {self.value}"
+
+
+def _vector(values, what: str) -> tuple[float, ...]:
+    v = tuple(float(c) for c in values)
+    if not all(np.isfinite(v)):
+        raise ContactSetupError(f"{what} must be finite, got {v}")
+    return v
+
+
+def _direction(values, what: str) -> tuple[float, ...]:
+    """A unit vector along ``values`` (scaled first: 1e-200 components are a direction)."""
+    v = np.asarray(_vector(values, what))
+    scale = np.abs(v).max(initial=0.0)
+    if scale == 0.0:
+        raise ContactSetupError(f"{what} is zero: a rigid obstacle needs a direction")
+    v = v / scale
+    return tuple(float(c) for c in v / np.linalg.norm(v))
+
+
+def rigid_plane(point: Sequence[float], normal: Sequence[float], name: str = "plane") -> Rigid:
+    """A rigid plane through ``point``; ``normal`` points towards the deformable body."""
+    return Rigid(name, "plane", point=_vector(point, "rigid plane point"),
+                 normal=_direction(normal, "rigid plane normal"))
+
+
+def rigid_sphere(center: Sequence[float], radius: float, name: str = "sphere") -> Rigid:
+    """A rigid sphere (a circle in 2D); the body touches it from outside."""
+    if not float(radius) > 0.0:
+        raise ContactSetupError(f"rigid sphere radius must be positive, got {radius}")
+    return Rigid(name, "sphere", center=_vector(center, "rigid sphere center"),
+                 radius=float(radius))
+
+
+def rigid_cylinder(point: Sequence[float], axis: Sequence[float], radius: float,
+                   name: str = "cylinder") -> Rigid:
+    """A rigid circular cylinder (3D) through ``point`` along ``axis``."""
+    if not float(radius) > 0.0:
+        raise ContactSetupError(f"rigid cylinder radius must be positive, got {radius}")
+    return Rigid(name, "cylinder", point=_vector(point, "rigid cylinder point"),
+                 axis=_direction(axis, "rigid cylinder axis"), radius=float(radius))
+
+
+@dataclass
+class ContactState:
+    """The contact at the slave nodes this rank owns, arrays of length ``n``.
+
+    ``status``: :data:`NO_ELEMENT` (-1), 0 open, 1 stick, 2 slip.  ``normal_force``
+    [force] > 0 in compression (slightly negative for an open element within the linear
+    law's tension range), ``pressure`` = ``normal_force / area`` [force / area];
+    ``tangential_force`` (n, gdim) [force] is the friction force of the slave node on the
+    master, ``traction`` = ``-tangential_force / area`` the tangential traction acting on
+    the slave body; ``force`` (n, gdim) [force] the whole contact force on the slave node;
+    ``gap`` [length] the clearance (< 0: overclosure); ``slip`` [length] the accumulated
+    slip; ``area`` the node's representative area (deformed, at the increment's start).
+    Nodes without an element have zeros.
+    """
+
+    nodes: np.ndarray  # (n,) local node (dof block) index in the slave space
+    X: np.ndarray  # (n, gdim) reference coordinates
+    x: np.ndarray  # (n, gdim) current coordinates
+    status: np.ndarray
+    gap: np.ndarray
+    normal_force: np.ndarray
+    pressure: np.ndarray
+    tangential_force: np.ndarray
+    traction: np.ndarray
+    slip: np.ndarray
+    force: np.ndarray
+    area: np.ndarray
+
+    @property
+    def has_element(self) -> np.ndarray:
+        """The nodes paired with a master (open or closed), (n,) bool."""
+        return self.status != NO_ELEMENT
+
+
+def _check_space(V, role: str) -> int:
+    gdim = V.mesh.geometry.dim
+    if V.dofmap.index_map_bs != gdim:
+        raise ContactSetupError(f"{role}: the function space has {V.dofmap.index_map_bs} "
+                                f"component(s), contact needs a vector space of the mesh's "
+                                f"dimension {gdim}")
+    return gdim
+
+
+def _facets(surface: Surface, role: str, comm: MPI.Comm) -> np.ndarray:
+    mesh = surface.V.mesh
+    if surface.tags.dim != mesh.topology.dim - 1:
+        raise ContactSetupError(f"{role}: the tags have dimension {surface.tags.dim}, facets "
+                                f"of this mesh have {mesh.topology.dim - 1}")
+    facets = compat.tagged(surface.tags, surface.value)
+    # each facet on one rank only: its owner (a ghost facet would count twice in the
+    # slave areas and appear twice as a master face)
+    facets = facets[facets < mesh.topology.index_map(mesh.topology.dim - 1).size_local]
+    if not comm.allreduce(len(facets)):
+        present = sorted(set().union(*comm.allgather(set(np.unique(surface.tags.values)
+                                                          .tolist()))))
+        raise ContactSetupError(f"{role}: no facet is tagged {surface.value} (the tags hold "
+                                f"{present})")
+    return facets
+
+
+class NodeToSurface:
+    """Penalty node-to-surface contact with Coulomb friction between two surfaces.
+
+    Parameters
+    ----------
+    slave : Surface
+        The facets whose nodes are projected onto the master.
+    master : Surface or Rigid
+        Master facets of a (usually other) body, or an analytic rigid obstacle; a rigid
+        obstacle's translation is :attr:`obstacle_translation` (prescribed, no dofs).
+    spaces : sequence of dolfinx FunctionSpaces, optional
+        The spaces of the user's system, in block order (default: the slave's space,
+        then the master's if it is another one).
+    law : Law, optional
+        Pressure-overclosure law (``contact.Linear``, ``Exponential``, ``Tabular``);
+        default: the linear law with penalty ``K``, ``sigma_inf``, ``c0``.
+    K, sigma_inf, c0 : float or str, optional
+        The linear law's penalty [pressure/length], tension limit [pressure] and cutoff
+        factor; defaults 10 E/h (h: :attr:`spacing`), E / 70000, 1e-3 (contact-theory.md
+        §8); ``K="calculix"``: CalculiX's 50 E.
+    mu : float
+        Coulomb friction coefficient (0: frictionless, the friction path is skipped).
+    stick_slope : float or str, optional
+        Tangential penalty ``lambda`` [pressure/length], default E/h; ``"calculix"``: E / 2.
+    E : float, optional
+        The slave body's Young's modulus, for the defaults above.
+    tangent : str
+        ``"consistent"`` (the exact tangent) or ``"calculix"``.
+    thickness : float
+        Out-of-plane thickness of a 2D (plane) body, scales slave areas.
+    pairing_iterations : int
+        Newton iterations per increment that re-pair slave nodes (CalculiX: 8; 1 is small
+        sliding).
+    obstacle_index, n_obstacles : int
+        For a rigid obstacle whose translation is an unknown of a
+        :class:`~dolfinx_friction.BlockProblem` with ``obstacles=n_obstacles`` (force- or
+        displacement-driven): which one it is.  Default: a prescribed translation.
+
+    Attributes
+    ----------
+    spacing : float
+        The slave surface's node spacing ``h`` [length] the defaults are scaled with: the
+        median over all slave nodes (all ranks) of each node's spacing in the reference
+        configuration (its representative area per thickness in 2D, the square root of it
+        in 3D; :class:`~dolfinx_friction.fem.surfaces.SlaveNodes`), to 12 significant digits
+        (the same on any number of ranks).
+    law, stick_slope, mu
+        The contact law as used, defaults resolved (:meth:`resolved`).
+    ramp : float
+        Share of the initial overclosures (found at the first pairing) still removed from
+        the clearances (contact-theory.md §3.4): ``1 - t`` in a first static step that
+        resolves them gradually, 0 otherwise (default).
+    """
+
+    def __init__(self, slave: Surface, master: Union[Surface, Rigid], *,
+                 spaces: Optional[Sequence] = None, law: Optional[Law] = None,
+                 K: Union[float, str, None] = None, sigma_inf: Optional[float] = None,
+                 c0: Optional[float] = None, mu: float = 0.0,
+                 stick_slope: Union[float, str, None] = None, E: Optional[float] = None,
+                 tangent: str = "consistent", thickness: float = 1.0,
+                 pairing_iterations: int = 8, name: str = "contact",
+                 obstacle_index: Optional[int] = None, n_obstacles: int = 0,
+                 body_names: tuple[str, str] = ("slave", "master")):
+        comm = slave.V.mesh.comm
+        self.comm, self.name = comm, name
+        self.gdim = _check_space(slave.V, f"{name}: slave")
+        rigid = isinstance(master, Rigid)
+        if not rigid:
+            if _check_space(master.V, f"{name}: master") != self.gdim:
+                raise ContactSetupError(f"{name}: slave and master meshes differ in dimension")
+        if spaces is None:
+            spaces = [slave.V] if rigid or master.V is slave.V else [slave.V, master.V]
+        self.spaces = list(spaces)
+        given = self._given(law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
+                            pairing_iterations)
+        self.layout = DofLayout(comm, [V.dofmap.index_map for V in self.spaces], n_obstacles)
+        slave_facets = _facets(slave, f"{name}: slave", comm)
+        self._fields: list[BodyField] = []
+        self._body_names = body_names
+        slave_field = self._field(slave.V, "slave", slave_facets, thickness)
+        if rigid:
+            if master.shape == "cylinder" and self.gdim != 3:
+                raise ContactSetupError(f"{name}: a rigid cylinder needs a 3D mesh (use "
+                                        f"rigid_sphere for a circle in 2D)")
+            for key in ("point", "normal", "center", "axis"):
+                v = getattr(master, key)
+                if v is not None and len(v) != self.gdim:
+                    raise ContactSetupError(f"{name}: the obstacle's {key} has {len(v)} "
+                                            f"components, the mesh is {self.gdim}D")
+            self._master_field = None
+            node = None
+            if obstacle_index is not None:
+                if not 0 <= obstacle_index < n_obstacles:
+                    raise ContactSetupError(f"{name}: obstacle_index {obstacle_index} is not "
+                                            f"one of the {n_obstacles} obstacles")
+                node = self.layout.rigid_node(obstacle_index)
+            master_side = RigidMaster(master, node, np.zeros(self.gdim))
+        else:
+            master_facets = _facets(master, f"{name}: master", comm)
+            if master.V.mesh is slave.V.mesh:
+                shared = np.intersect1d(master_facets, slave_facets)
+                if comm.allreduce(len(shared)):
+                    raise ContactSetupError(f"{name}: slave and master share facets: a "
+                                            f"surface cannot contact itself")
+            self._master_field = self._field(master.V, "master", master_facets, thickness)
+            # each facet once over all ranks: the ones this rank owns
+            master_side = master_faces(self._master_field, "master")
+        slaves = SlaveNodes(slave_field, "slave")
+        self._slave_field = slave_field
+        # a node's area sums its faces' shares in an order that depends on the partition:
+        # 12 digits make h, and the defaults scaled with it, the same on any number of ranks
+        self.spacing = float(f"{np.median(np.concatenate(comm.allgather(slaves.spacing))):.12g}")
+        self.params = self._parameters(given, law, E)
+        self._interaction = ContactInteraction(comm, name, self.params.element, slaves,
+                                               master_side, self.gdim,
+                                               self.params.pairing_iterations)
+        self.ramp = 0.0
+        self._u_n: Optional[PETSc.Vec] = None
+        self._saved: Optional[tuple] = None
+        self._iteration = 0
+        self._u_slaves = np.zeros((len(slaves.nodes), self.gdim))
+        self._bc_cache: tuple = ((), np.zeros(0, np.int64))
+        self._dof_cache: tuple = (None,)  # (candidates, their dofs)
+        self._slot_cache: tuple = (None,)  # (candidates, rows, cols, slot)
+        #: changes whenever the candidate couplings (the matrix pattern) change
+        self.couplings_version = 0
+        #: counts the evaluations of the elements (an update that pairs the same elements
+        #: at the iterate last evaluated keeps that evaluation)
+        self.evaluations = 0
+        self._evaluated_at: Optional[tuple] = None  # (x's local values, ramp) of the last
+        self._key = uuid.uuid4().hex  # names this pair in the matrices' attributes
+
+    @property
+    def obstacle_translation(self) -> np.ndarray:
+        """(gdim,) prescribed translation of the rigid obstacle [length]; set it (e.g. in
+        the load function of an increment) before :meth:`begin`."""
+        master = self._interaction.master
+        if not isinstance(master, RigidMaster):
+            raise AttributeError(f"{self.name}: the master is not a rigid obstacle")
+        return master.translation.copy()
+
+    @obstacle_translation.setter
+    def obstacle_translation(self, value: Sequence[float]) -> None:
+        master = self._interaction.master
+        if not isinstance(master, RigidMaster):
+            raise AttributeError(f"{self.name}: the master is not a rigid obstacle")
+        master.translation[:] = _vector(value, f"{self.name}: obstacle translation")
+
+    @property
+    def law(self) -> Law:
+        """The pressure-overclosure law in use, defaults resolved (``Linear``: ``K``,
+        ``sigma_inf``, ``c0``)."""
+        return self.params.element.law
+
+    @property
+    def stick_slope(self) -> float:
+        """The stick slope ``lambda`` in use [pressure/length], default resolved."""
+        return self.params.element.stick_slope
+
+    @property
+    def mu(self) -> float:
+        return self.params.element.mu
+
+    def resolved(self) -> dict:
+        """The contact settings as used, every default resolved, as plain numbers: ``law``
+        (``"linear"``, ``"exponential"``, ``"tabular"``) and its parameters (``K``,
+        ``sigma_inf``, ``c0`` / ``c0``, ``p0`` / ``pressures``, ``overclosures``),
+        ``mu``, ``stick_slope``, ``tangent``, ``pairing_iterations`` and the slave node
+        ``spacing`` h the defaults scale with."""
+        return {"law": type(self.law).__name__.lower(), **asdict(self.law), "mu": self.mu,
+                "stick_slope": self.stick_slope, "tangent": self.params.element.tangent,
+                "pairing_iterations": self.params.pairing_iterations, "spacing": self.spacing}
+
+    # ------------------------------------------------------------- set-up
+    def _given(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
+               pairing_iterations) -> ContactPair:
+        """The parameters as given, checked by the scene's rules (the same one-line
+        messages as a scene file's ``[[contact]]``); defaults still to be resolved."""
+        try:
+            given = ContactPair("slave", "master", K=K, sigma_inf=sigma_inf, c0=c0, mu=mu,
+                                stick_slope=stick_slope, tangent=tangent,
+                                pairing_iterations=pairing_iterations)
+            if E is not None:
+                modulus(E, "E")
+        except SceneError as error:
+            raise ContactSetupError(f"{self.name}: {error.detail}") from None
+        defaulted = [key for key, value in (("K", K if law is None else 1.0),
+                                            ("sigma_inf", sigma_inf if law is None else 1.0),
+                                            ("stick_slope", stick_slope if given.mu > 0 else 1.0))
+                     if value is None or value == CALCULIX]
+        if defaulted and E is None:
+            raise ContactSetupError(f"{self.name}: give E (the slave body's Young's modulus) for "
+                                    f"the default {', '.join(defaulted)}, or give them")
+        return given
+
+    def _parameters(self, given: ContactPair, law: Optional[Law],
+                    E: Optional[float]) -> "_Parameters":
+        """Resolve the defaults with the slave node spacing (:meth:`ContactPair.resolved`)."""
+        pair = given.resolved(E or 1.0, self.spacing)
+        for key in ("K", "stick_slope"):
+            value = getattr(pair, key)
+            if not 0.0 < value < np.inf:
+                raise ContactSetupError(f"{self.name}: the default {key} = {value:g} (from E = "
+                                        f"{E} and the slave node spacing h = "
+                                        f"{self.spacing:g}) is not a positive finite number: "
+                                        f"give {key}")
+        law = law if law is not None else make_law(pair)
+        return _Parameters(ContactParameters(law, pair.mu, pair.stick_slope, pair.tangent),
+                           pair.pairing_iterations)
+
+    def _field(self, V, group: str, facets: np.ndarray, thickness: float) -> BodyField:
+        block = next((b for b, W in enumerate(self.spaces) if W is V), None)
+        if block is None:
+            raise ContactSetupError(f"{self.name}: the {group}'s function space is not one "
+                                    f"of `spaces`")
+        existing = next((f for f in self._fields if f.block == block), None)
+        if existing is not None:
+            existing.mesh.groups[group] = (V.mesh.topology.dim - 1, facets)
+            return existing
+        mesh = V.mesh
+        name = self._body_names[0 if group == "slave" else 1]
+        body = Body(name, E=1.0, nu=0.0, thickness=float(thickness))
+        groups = {group: (mesh.topology.dim - 1, facets)}
+        X = V.tabulate_dof_coordinates()[:, : self.gdim].copy()
+        f = BodyField(body, BodyMesh(body.name, mesh, groups), V, compat.function(V), block,
+                      self.layout.nodes(block), X)
+        self._fields.append(f)
+        return f
+
+    # ------------------------------------------------------------- increments
+    def begin(self, x: PETSc.Vec, start: Optional[PETSc.Vec] = None) -> None:
+        """Start an increment (collective): checkpoint the friction history for
+        :meth:`rollback`, update the slave areas and search the candidate master faces
+        of every slave node at ``x``, the increment's first iterate.  ``start`` is the
+        converged state the increment starts from (default ``x``): slip is measured
+        from it."""
+        if self._u_n is None:
+            self._u_n = x.duplicate()
+        (x if start is None else start).copy(self._u_n)
+        self._evaluated_at = None
+        self._saved = self._interaction.save()
+        self._search(x, update_areas=True)
+        self._iteration = 0
+
+    def update(self, x: PETSc.Vec, pairing: bool = True, search: bool = True) -> bool:
+        """Pair the slave nodes at the iterate ``x`` and evaluate the elements (collective).
+
+        Pairing happens in the first ``pairing_iterations`` calls of an increment with
+        ``pairing=True`` (pass ``False`` for line-search trials).  Returns True when a node
+        slid past all its candidate faces and they were searched again (``search``): the
+        couplings changed, make the matrix again (:func:`create_matrix`).  Without
+        ``search`` such a node keeps the face it misses least.
+        """
+        if self._u_n is None:
+            raise RuntimeError(f"{self.name}: call begin(x) at the start of the increment")
+        inter, changed = self._interaction, False
+        evaluated = inter.elements
+        if pairing and self._iteration < inter.pairing_iterations:
+            inter.pair(x, self._iteration)
+            if (search and self._iteration > 0
+                    and self.comm.allreduce(int(inter.needs_search()))):
+                self._search(x, update_areas=False)
+                inter.pair(x, self._iteration)
+                changed = True
+            inter.mark_off_surface()
+        if pairing:
+            self._iteration += 1
+        values = x.getArray(readonly=True)
+        if not changed and self._same_evaluation(evaluated, values):
+            inter.elements = evaluated  # paired as before at the same iterate: keep it
+            return False
+        inter.evaluate(x, self._u_n, self.ramp)
+        self.evaluations += 1
+        self._evaluated_at = (values.copy(), self.ramp)
+        self._u_slaves = inter.slave_displacements(x)
+        return changed
+
+    def _same_evaluation(self, evaluated, values: np.ndarray) -> bool:
+        """Whether the current elements are those of the last evaluation (the same
+        candidates) at the same iterate and ramp, on every rank (collective)."""
+        now, last = self._interaction.elements, self._evaluated_at
+        same = (last is not None and evaluated is not None and evaluated.result is not None
+                and last[1] == self.ramp and np.array_equal(now.candidate, evaluated.candidate)
+                and np.array_equal(last[0], values))
+        return self.comm.allreduce(int(not same)) == 0
+
+    def commit(self) -> None:
+        """Accept the increment: its trial friction history becomes the start state."""
+        self._evaluated_at = None
+        self._interaction.commit()
+        self._saved = None
+
+    def rollback(self) -> None:
+        """Forget the increment: restore the history saved by :meth:`begin`."""
+        self._evaluated_at = None
+        if self._saved is not None:
+            self._interaction.restore(self._saved)
+
+    def _search(self, x: PETSc.Vec, update_areas: bool) -> None:
+        before = self._interaction.candidates.nodes
+        for f in self._fields:
+            f.u.x.array[: f.n_owned * self.gdim] = x.getArray(readonly=True)[
+                self.layout.owned_slice(f.block, self.gdim)]
+            compat.scatter_forward(f.u)
+        master_u = None
+        if self._master_field is not None:
+            f = self._master_field
+            master_u = f.u.x.array.reshape(-1, self.gdim)[self._interaction.master.local]
+        self._interaction.search(x, master_u, update_areas)
+        same = np.array_equal(before, self._interaction.candidates.nodes)
+        if self.comm.allreduce(0 if same else 1):
+            self.couplings_version += 1
+
+    # ------------------------------------------------------------- assembly
+    def surface_dofs(self) -> np.ndarray:
+        """Sorted global dofs of every node this rank's part of the contact can couple: its
+        slave nodes and its master faces' nodes (a rigid obstacle's translation excluded).
+        In serial, the couplings of every search lie within them."""
+        inter = self._interaction
+        nodes = [inter.slaves.nodes]
+        if not inter.rigid:
+            nodes.append(inter.master.nodes.ravel())
+        nodes = np.unique(np.concatenate(nodes))
+        return (nodes[:, None] * self.gdim + np.arange(self.gdim)).ravel()
+
+    def _dofs(self) -> np.ndarray:
+        """(n_candidates, nodes * gdim) global dofs of the candidate elements, -1 for the
+        nodes of a rigid obstacle (no dofs); made once per search, read-only."""
+        candidates = self._interaction.candidates
+        if self._dof_cache[0] is not candidates:
+            nodes, d = candidates.nodes, self.gdim
+            dofs = (nodes[:, :, None] * d + np.arange(d)).reshape(len(nodes), nodes.shape[1] * d)
+            dofs[np.repeat(nodes < 0, d, axis=1)] = -1
+            dofs.flags.writeable = False
+            self._dof_cache = (candidates, dofs)
+        return self._dof_cache[1]
+
+    def _coupling_slots(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The distinct couplings of the candidate elements, made once per search: their
+        global ``rows`` and ``cols`` (m,), and ``slot`` (n_candidates, nd, nd), the index
+        among them of each entry of each candidate's tangent (-1 where a rigid obstacle's
+        node has no dofs).  Found among node pairs (gdim^2 fewer than dof pairs)."""
+        candidates = self._interaction.candidates
+        if self._slot_cache[0] is not candidates:
+            nodes, d = candidates.nodes, self.gdim
+            n, k = nodes.shape
+            a = np.broadcast_to(nodes[:, :, None], (n, k, k))
+            b = np.broadcast_to(nodes[:, None, :], (n, k, k))
+            valid = (a >= 0) & (b >= 0)
+            width = int(nodes.max(initial=0)) + 1
+            pairs, inverse = np.unique(a[valid] * width + b[valid], return_inverse=True)
+            pair = np.full((n, k, k), -1, dtype=np.int64)
+            pair[valid] = inverse
+            i = np.arange(d)
+            # entry (node alpha, component i; node beta, component j) of a candidate's tangent
+            slot = (pair[:, :, None, :, None] * d * d + i[:, None, None] * d + i).reshape(
+                n, k * d, k * d)
+            slot[np.repeat(np.repeat(pair < 0, d, axis=1), d, axis=2)] = -1
+            rows = ((pairs // width)[:, None, None] * d + i[:, None]).repeat(d, axis=2)
+            cols = ((pairs % width)[:, None, None] * d + i).repeat(d, axis=1)
+            self._slot_cache = (candidates, rows.ravel(), cols.ravel(), slot)
+        return self._slot_cache[1:]
+
+    def _bc_dofs(self, bcs: Sequence) -> np.ndarray:
+        """Sorted global dofs of the Dirichlet conditions ``bcs`` (all ranks; collective)."""
+        key = tuple(id(bc) for bc in bcs)
+        if self._bc_cache[0] == key:
+            return self._bc_cache[1]
+        d, own = self.gdim, []
+        for bc in bcs:
+            block = next((b for b, V in enumerate(self.spaces) if compat.bc_on_space(bc, V)),
+                         None)
+            if block is None:
+                continue  # a condition on another space: none of the contact's rows
+            local = compat.bc_local_dofs(bc, self.spaces[block].dofmap.index_map.size_local * d)
+            own.append(self.layout.nodes(block)[local // d] * d + local % d)
+        mine = np.concatenate(own) if own else np.zeros(0, np.int64)
+        dofs = np.unique(np.concatenate(self.comm.allgather(mine)))
+        self._bc_cache = (key, dofs)
+        return dofs
+
+    def _masked_dofs(self, bcs: Sequence) -> np.ndarray:
+        """:meth:`_dofs` with -1 also for the dofs of ``bcs`` (read-only without them)."""
+        dofs = self._dofs()
+        fixed = self._bc_dofs(bcs)
+        if len(fixed):
+            at = np.searchsorted(fixed, dofs).clip(max=len(fixed) - 1)
+            dofs = np.where(fixed[at] == dofs, -1, dofs)
+        return dofs
+
+    def _element_rows(self) -> np.ndarray:
+        return self._interaction.elements.candidate
+
+    def add_residual(self, b: PETSc.Vec, bcs: Sequence = ()) -> None:
+        """Add the contact forces (internal forces: residual = internal - external) into
+        ``b`` (collective; ``b`` is assembled afterwards)."""
+        el = self._evaluated()
+        dofs = self._masked_dofs(bcs)[el.candidate]
+        values = el.result.f.reshape(len(dofs), dofs.shape[1])
+        keep = dofs >= 0
+        b.setValues(dofs[keep].astype(PETSc.IntType), values[keep], addv=PETSc.InsertMode.ADD)
+        b.assemble()
+
+    def add_jacobian(self, A: PETSc.Mat, bcs: Sequence = ()) -> None:
+        """Add the contact tangent into ``A`` (collective; assembled afterwards).
+
+        ``A`` must hold the candidate couplings in its pattern: make it with
+        :func:`create_matrix` after :meth:`begin` (and again when :meth:`update`
+        returned True).
+        """
+        if (A.getAttr(_MATRIX_ATTR) or {}).get(self._key) != self.couplings_version:
+            raise ContactSetupError(f"{self.name}: the matrix has no slots for the current "
+                                    f"contact couplings: make it with create_matrix(...) "
+                                    f"after begin() (and again when update() returns True)")
+        el = self._evaluated()
+        dofs = self._masked_dofs(bcs)[el.candidate].astype(PETSc.IntType)
+        nd = dofs.shape[1]
+        A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)  # after dolfinx's INSERT of diagonals
+        A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        A.setValuesRCV(dofs, dofs, el.result.K.reshape(-1, nd, nd), addv=PETSc.InsertMode.ADD)
+        A.assemble()
+
+    def add_roundoff(self, s: PETSc.Vec) -> None:
+        """Add the size of the round-off of the contact forces (their sensitivity to the
+        coordinates, which carry the clearance) into ``s``, per dof (not assembled)."""
+        el = self._evaluated()
+        dofs = self._dofs()[el.candidate]
+        keep = dofs >= 0
+        s.setValues(dofs[keep].astype(PETSc.IntType), el.roundoff[keep],
+                    addv=PETSc.InsertMode.ADD)
+
+    def couplings(self) -> tuple[np.ndarray, np.ndarray]:
+        """Global ``(rows, cols)`` of every entry the contact tangent may fill until the
+        next search (each candidate element's dofs, all against all), each once."""
+        rows, cols, _ = self._coupling_slots()
+        return rows, cols
+
+    def coupling_values(self, bcs: Sequence = ()) -> np.ndarray:
+        """Tangent values in the order of :meth:`couplings`: the sum of the elements'
+        entries (0 where no element couples, and in the rows and columns of ``bcs``)."""
+        el = self._evaluated()
+        rows, _, slot = self._coupling_slots()
+        slot = slot[el.candidate]
+        K = el.result.K.reshape(slot.shape)
+        masked = self._masked_dofs(bcs)[el.candidate] < 0
+        keep = (slot >= 0) & ~(masked[:, :, None] | masked[:, None, :])
+        return np.bincount(slot[keep], weights=K[keep], minlength=len(rows))
+
+    def element_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Global ``(rows, cols, values)`` of the current elements' tangents only (what
+        :meth:`coupling_values` holds where it is not zero by construction; a rigid
+        obstacle's rows and columns left out; no bcs)."""
+        el = self._evaluated()
+        dofs = self._dofs()[el.candidate]
+        n, nd = dofs.shape
+        K = el.result.K.reshape(n, nd, nd)
+        rows = np.broadcast_to(dofs[:, :, None], K.shape)
+        cols = np.broadcast_to(dofs[:, None, :], K.shape)
+        keep = (dofs >= 0)[:, :, None] & (dofs >= 0)[:, None, :]
+        return rows[keep], cols[keep], K[keep]
+
+    def register_matrix(self, A: PETSc.Mat) -> None:
+        """Declare that ``A``'s pattern holds the current couplings (done by
+        :func:`create_matrix`; for a matrix preallocated some other way)."""
+        marks = A.getAttr(_MATRIX_ATTR) or {}
+        marks[self._key] = self.couplings_version
+        A.setAttr(_MATRIX_ATTR, marks)
+
+    def _evaluated(self):
+        el = self._interaction.elements
+        if el.result is None:
+            raise RuntimeError(f"{self.name}: call update(x) before assembling")
+        return el
+
+    # ------------------------------------------------------------- results
+    def state(self) -> ContactState:
+        """The contact at this rank's owned slave nodes (after :meth:`update`)."""
+        inter = self._interaction
+        slaves = inter.slaves
+        n, d = len(slaves.nodes), self.gdim
+        zero, zeros = np.zeros(n), np.zeros((n, d))
+        out = ContactState(slaves.local.copy(), slaves.X.copy(), slaves.X + self._u_slaves,
+                           np.full(n, NO_ELEMENT), zero.copy(), zero.copy(), zero.copy(),
+                           zeros.copy(), zeros.copy(), zero.copy(), zeros.copy(),
+                           slaves.area.copy())
+        el = inter.elements
+        r = el.result
+        if r is not None:
+            s, area = el.slave, slaves.area[el.slave]
+            out.status[s] = r.status
+            out.gap[s] = r.g_N
+            out.normal_force[s] = r.F_N
+            out.pressure[s] = r.F_N / area
+            out.tangential_force[s] = r.F_T
+            out.traction[s] = -r.F_T / area[:, None]
+            out.force[s] = -r.f[:, -1, :]
+            if r.trial is not None:
+                out.slip[s] = np.linalg.norm(r.trial.g_p, axis=1)
+        return out
+
+    def force(self) -> np.ndarray:
+        """(gdim,) total contact force on the slave body, summed over all ranks
+        (collective)."""
+        return self.comm.allreduce(self.state().force.sum(axis=0))
+
+    def pairing(self) -> np.ndarray:
+        """(n, 2) status and global master face id of every owned slave node ((-1, -1)
+        without an element; face -1 on a rigid obstacle): what the Newton trace compares."""
+        return self._interaction.contact_state()
+
+    def penetration(self) -> float:
+        """Largest overclosure the law acts on, relative to the slave node spacing, over all
+        ranks (collective): a penalty too soft for the mesh shows here."""
+        return self.comm.allreduce(self._interaction.penetration(), op=MPI.MAX)
+
+    def detached(self) -> int:
+        """Slave nodes closed at the last commit that slid off the master surface in this
+        increment, over all ranks (collective)."""
+        return int(self.comm.allreduce(self._interaction.detached()))
+
+    def zone_vanished(self) -> bool:
+        """Whether all of a contact zone closed at the last commit is gone, with some of its
+        nodes off the master surface (collective): more often a diverging iterate that
+        threw the zone away than a real slide off the end."""
+        inter = self._interaction
+        before, now, off = self.comm.allreduce(
+            np.array([inter.closed.sum(), inter.counts()[0], inter.detached()]))
+        return bool(before > 0 and now == 0 and off > 0)
+
+    def counts(self) -> tuple[int, int]:
+        """Slave nodes in contact (closed) and slipping, over all ranks (collective)."""
+        return tuple(int(c) for c in self.comm.allreduce(np.asarray(self._interaction.counts())))
+
+    def fields(self) -> dict:
+        """The state as dolfinx Functions on the slave body's mesh (for dolfinx's writers):
+        ``contact_pressure``, ``contact_status``, ``contact_slip`` (scalar) and
+        ``tangential_traction`` (vector), zero (status -1) away from the slave nodes."""
+        st = self.state()
+        V = self._slave_field.V
+        S = compat.scalar_space(V.mesh, compat.space_degree(V))
+        out = {}
+        for key, values, space in (("contact_pressure", st.pressure, S),
+                                   ("contact_status", st.status, S),
+                                   ("contact_slip", st.slip, S),
+                                   ("tangential_traction", st.traction, V)):
+            g = compat.function(space)
+            width = 1 if values.ndim == 1 else values.shape[1]
+            array = g.x.array.reshape(-1, width)
+            array[:] = NO_ELEMENT if key == "contact_status" else 0.0
+            array[st.nodes] = values.reshape(len(st.nodes), width)
+            compat.scatter_forward(g)
+            g.name = key
+            out[key] = g
+        return out
+
+
+@dataclass(frozen=True)
+class _Parameters:
+    element: ContactParameters
+    pairing_iterations: int
+
+
+def create_matrix(a, contacts: Sequence[NodeToSurface] = ()) -> PETSc.Mat:
+    """A PETSc matrix for the compiled bilinear form ``a`` (one space) whose sparsity also
+    holds the current couplings of ``contacts``: dolfinx assembles ``a`` into it as into
+    its own matrix, and the contacts add their tangents without new non-zeros.
+    Collective; call after :meth:`NodeToSurface.begin`."""
+    from dolfinx_friction.fem.pattern import CooPattern
+    base = compat.create_matrix(a)
+    compat.assemble_matrix_into(base, a)
+    indptr, cols, _ = base.getValuesCSR()
+    start, end = base.getOwnershipRange()
+    rows = np.repeat(np.arange(start, end, dtype=np.int64), np.diff(indptr))
+    blocks = [(rows, cols)] + [c.couplings() for c in contacts]
+    pattern = CooPattern(base.getComm().tompi4py(), end - start, blocks)
+    A = pattern.create_matrix(base.getBlockSize())
+    A.setLGMap(*base.getLGMap())
+    base.destroy()
+    for c in contacts:
+        c.register_matrix(A)
+    return A

@@ -1,0 +1,454 @@
+"""One contact pair at run time: search, pairing, element evaluation, slave history.
+
+Each rank evaluates the elements of the slave nodes it owns.  Before each
+pairing it receives only the master faces whose bounding boxes meet the
+(inflated) bounding box of its slave nodes; the displacements of their nodes,
+and of the slave nodes, are gathered from the system vector by a PETSc
+scatter.  Forces and tangents go back by global index (ADD).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional, Union
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+from scipy.spatial import cKDTree
+
+from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, ElementResult,
+                                              Kinematics, evaluate, face_kinematics,
+                                              rigid_kinematics)
+from dolfinx_friction.contact.friction import FrictionState
+from dolfinx_friction.contact.projection import clearances
+from dolfinx_friction.scene.model import Rigid
+from dolfinx_friction.fem.surfaces import MasterFaces, SlaveNodes
+
+
+class _Prescribed:
+    """Stands in for :class:`NodeValues` for a rigid obstacle without dofs: its
+    translation, whatever the vector."""
+
+    def __init__(self, master: RigidMaster):
+        self.master = master
+
+    def __call__(self, vec: PETSc.Vec) -> np.ndarray:
+        return np.asarray(self.master.translation, dtype=float).reshape(1, -1).copy()
+
+
+class NodeValues:
+    """Values of a distributed system vector at chosen nodes, gathered from their owners."""
+
+    def __init__(self, template: PETSc.Vec, nodes: np.ndarray, gdim: int):
+        idx = (np.asarray(nodes, dtype=np.int64).reshape(-1, 1) * gdim + np.arange(gdim)).ravel()
+        self.gdim = gdim
+        self.local = PETSc.Vec().createSeq(len(idx), comm=PETSc.COMM_SELF)
+        index_set = PETSc.IS().createGeneral(idx.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        self.scatter = PETSc.Scatter().create(template, index_set, self.local, None)
+
+    def __call__(self, vec: PETSc.Vec) -> np.ndarray:
+        self.scatter.scatter(vec, self.local, addv=PETSc.InsertMode.INSERT,
+                             mode=PETSc.ScatterMode.FORWARD)
+        return self.local.getArray(readonly=True).reshape(-1, self.gdim).copy()
+
+
+@dataclass
+class RigidMaster:
+    """An analytic rigid obstacle whose translation is system node ``node``, or, with
+    ``node = None``, the prescribed ``translation`` (gdim,) (no dofs: its element
+    couples the slave node alone)."""
+
+    rigid: Rigid
+    node: Optional[int] = None
+    translation: Optional[np.ndarray] = None
+
+    def kinematics(self, X: np.ndarray, u: np.ndarray, U: np.ndarray) -> Kinematics:
+        r = self.rigid
+        return rigid_kinematics(r.shape, X, u, U, point=r.point, normal=r.normal,
+                                center=r.center, axis=r.axis, radius=r.radius or 0.0)
+
+
+@dataclass
+class _Candidates:
+    """Possible (slave node, master) pairs of an increment."""
+
+    slave: np.ndarray  # indices into the pair's slave nodes
+    face: np.ndarray  # rows of the received master faces (-1 for rigid)
+    nodes: np.ndarray  # (n, nodes) system nodes of each candidate element
+
+
+@dataclass
+class Elements:
+    """The current elements of a pair: which slaves, which master, and their results."""
+
+    slave: np.ndarray  # indices into the pair's slave nodes
+    face: np.ndarray  # row of the master face in the received face set (-1 for rigid)
+    nodes: np.ndarray  # (n, nodes) system nodes of each element
+    face_id: np.ndarray  # global number of each element's master face (-1 for rigid)
+    candidate: np.ndarray  # index of each element among the pair's candidates
+    xi: Optional[np.ndarray] = None  # last projection point, a start for the next one
+    result: Optional[ElementResult] = None
+    roundoff: Optional[np.ndarray] = None  # (n, nodes * gdim) round-off scale of the forces
+
+
+#: Parametric distance by which a slave node may pass its current face's edge and keep
+#: that face during an increment (hysteresis against switching between faces).
+FACE_SLACK = 1e-3
+#: A slave node that projects inside no face (near a convex edge of a faceted master)
+#: takes the nearest face it misses by at most this parametric distance.
+EDGE_SLACK = 0.05
+#: Ties in pairing: a node this close (parametric) to a face's edge projects inside it,
+#: and clearances that differ by less than this times the node spacing are equal; ties go
+#: to the face whose reference centroid (rounded to 1e3 TIE spacings) comes first (x, y,
+#: z).  So a node on an edge shared by two faces picks the same face whatever the
+#: partition (round-off and global face numbers differ between partitions).
+TIE = 1e-9
+
+
+class ContactInteraction:
+    """Runtime state of one contact pair on this rank."""
+
+    def __init__(self, comm: MPI.Comm, name: str, params: ContactParameters,
+                 slaves: SlaveNodes, master: Union[MasterFaces, RigidMaster], gdim: int,
+                 pairing_iterations: int = 8):
+        self.comm, self.name, self.params, self.gdim = comm, name, params, gdim
+        self.slaves, self.master = slaves, master
+        self.pairing_iterations = pairing_iterations
+        n = len(slaves.nodes)
+        self.history = FrictionState.zeros(n, gdim)
+        self.in_contact = np.zeros(n, dtype=bool)  # had an element at the last commit
+        self.closed = np.zeros(n, dtype=bool)  # closed (not open) at the last commit
+        self.lost = np.zeros(n, dtype=bool)  # projected onto no candidate at the last pairing
+        self.off_surface = np.zeros(n, dtype=bool)  # lost even after a search, this increment
+        self._gap_offset = np.zeros(0)  # ramp offset of the current elements' clearances
+        self.cutoff = params.law.cutoff(slaves.area)
+        self.initial_gap = np.zeros(n)  # negative clearances found at the first pairing (§3.4)
+        self._first_pairing = True
+        self.elements = Elements(*(np.zeros(0, int),) * 2, np.zeros((0, 2), int),
+                                 *(np.zeros(0, int),) * 2)
+        self.candidates = _Candidates(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int))
+        self._faces: Optional[tuple[np.ndarray, np.ndarray]] = None  # received (nodes, X)
+        self._face_ids = np.zeros(0, dtype=np.int64)  # global ids of the received faces
+        self._centroids = np.zeros((0, gdim))  # their reference centroids (ties in pairing)
+        # (n_candidates, fdim) last projection points: the next pairing's starts
+        self._xi = np.zeros((0, 0 if self.rigid else master.face.fdim))
+        self._gather: Optional[NodeValues] = None
+        self._slave_gather: Optional[NodeValues] = None
+        self._trial: Optional[FrictionState] = None
+
+    @property
+    def rigid(self) -> bool:
+        return isinstance(self.master, RigidMaster)
+
+    # ------------------------------------------------------------------ search
+    def _exchange_faces(self, u_faces_local: np.ndarray, x_slaves: np.ndarray) -> None:
+        """Receive the master faces near this rank's slave nodes from every rank."""
+        m: MasterFaces = self.master
+        x_faces = m.X + u_faces_local
+        size = _face_size(x_faces)
+        radius = 2.0 * self.comm.allreduce(size.max(initial=0.0), op=MPI.MAX)
+        if len(x_slaves):
+            box = np.stack([x_slaves.min(0) - radius, x_slaves.max(0) + radius])
+        else:
+            box = None
+        boxes = self.comm.allgather(box)
+        lo, hi = x_faces.min(axis=1), x_faces.max(axis=1)
+        outgoing = []
+        for b in boxes:
+            keep = (np.zeros(len(lo), bool) if b is None
+                    else np.all((hi >= b[0]) & (lo <= b[1]), axis=1))
+            outgoing.append((m.nodes[keep], m.X[keep], m.ids[keep]))
+        incoming = self.comm.alltoall(outgoing)
+        nodes = np.concatenate([f[0] for f in incoming]).reshape(-1, m.face.n_nodes)
+        X = np.concatenate([f[1] for f in incoming]).reshape(-1, m.face.n_nodes, self.gdim)
+        self._faces = (nodes, X)
+        self._centroids = X.mean(axis=1)
+        self._face_ids = np.concatenate([f[2] for f in incoming])
+
+    def search(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray],
+               update_areas: bool = True) -> None:
+        """Candidate masters of every slave node (collective).
+
+        Called once per increment, and again within it only when a slave node
+        slides past all its candidates (:meth:`needs_search`).  Updates the slave
+        areas on the deformed faces (unless ``update_areas`` is false), receives
+        the master faces near this rank's slave nodes and keeps, for each slave
+        node, the faces with the nearest centroids: pairing chooses among them,
+        so the matrix pattern of the contact couplings changes only with a search.
+        """
+        if self._slave_gather is None:
+            self._slave_gather = NodeValues(u, self.slaves.nodes, self.gdim)
+        if update_areas:  # the first search of an increment
+            self.off_surface[:] = False
+            self.slaves.update_areas()
+            self.cutoff = self.params.law.cutoff(self.slaves.area)
+        n = len(self.slaves.nodes)
+        if self.rigid:
+            node = self.master.node
+            if self._gather is None:
+                self._gather = (_Prescribed(self.master) if node is None
+                                else NodeValues(u, np.array([node]), self.gdim))
+            self.candidates = _Candidates(np.arange(n), np.full(n, -1), np.stack(
+                [np.full(n, -1 if node is None else node), self.slaves.nodes], axis=1))
+            return
+        keys, xi = self._candidate_keys(), self._xi
+        x_s = self.slaves.X + self._slave_gather(u)
+        self._exchange_faces(u_faces_local, x_s)
+        self._gather = NodeValues(u, self._faces[0].ravel(), self.gdim)
+        face_nodes, X_f = self._faces
+        x_f = X_f + self._gather(u).reshape(X_f.shape)
+        slave, face = _nearest_faces(x_s, x_f, 16 if self.gdim == 3 else 6)
+        nodes = np.concatenate([face_nodes[face], self.slaves.nodes[slave, None]], axis=1)
+        self.candidates = _Candidates(slave, face, nodes)
+        # a candidate kept by the search starts from its last projection point
+        self._xi = np.tile(self.master.face.centroid, (len(slave), 1))
+        _, new, old = np.intersect1d(self._candidate_keys(), keys, assume_unique=True,
+                                     return_indices=True)
+        self._xi[new] = xi[old]
+
+    def _candidate_keys(self) -> np.ndarray:
+        """(n_candidates,) a unique number of each candidate's slave node and global face id."""
+        c = self.candidates
+        return c.slave.astype(np.int64) << 32 | self._face_ids[c.face]
+
+    def pair(self, u: PETSc.Vec, iteration: int) -> None:
+        """Pair every slave node with one of its candidate masters within the cutoff.
+
+        A slave node takes the nearest face onto which it projects orthogonally.
+        Pairing has hysteresis: within an increment (``iteration > 0``) a node with
+        an element keeps one even above the cutoff, and keeps its face while it
+        still projects onto it (up to :data:`FACE_SLACK` past its edges); a node
+        that projects onto none of its candidates keeps the one it misses least
+        (and is marked :attr:`lost`, which asks for a new search).  So elements are
+        dropped only at the first pairing of an increment.  With a single pairing
+        per increment, nodes closed at the last commit also keep an element then,
+        however far the predictor has moved them.
+
+        Each candidate is projected from its last projection point (:meth:`_project`).
+        Only stationary points within EDGE_SLACK of a face count, but for the least missed
+        faces of lost nodes, which are projected from the centroids: so the elements are
+        those of projections from the centroids wherever a candidate's stationary point is
+        unique and, when within EDGE_SLACK of the face, reached from the centroid.
+        """
+        cands = self.candidates
+        u_s = self._slave_gather(u)
+        n = len(self.slaves.nodes)
+        had = np.zeros(n, dtype=bool)  # must keep an element
+        if iteration > 0:
+            had[self.elements.slave] = True
+        elif self.pairing_iterations == 1:
+            had |= self.closed
+        if self.rigid:
+            kin = self.master.kinematics(self.slaves.X, u_s, self._gather(u)[0])
+            chosen = np.flatnonzero((kin.g_N <= self.cutoff) | had)
+            self._set_elements(chosen, np.zeros((len(chosen), 0)))
+            return
+        slave, cand = cands.slave, cands.face
+        x_s = self.slaves.X + u_s
+        x_f = self._faces[1] + self._gather(u).reshape(self._faces[1].shape)
+        previous = np.full(n, -1, dtype=np.int64)
+        if iteration > 0:
+            previous[self.elements.slave] = self.elements.face_id
+        # a node that keeps its face (rank 0 below; face ids are unique) wins whatever its
+        # other candidates: they stay unprojected (outside = inf, as if Newton had failed),
+        # which changes neither its choice nor near (lost and fallback then do not apply)
+        current = self._face_ids[cand] == previous[slave]
+        outside, g_N = np.full(len(slave), np.inf), np.full(len(slave), np.inf)
+        self._project(x_s, x_f, np.flatnonzero(current), outside, g_N)
+        kept = np.zeros(n, dtype=bool)
+        kept[slave[current & (outside <= FACE_SLACK)]] = True
+        self._project(x_s, x_f, np.flatnonzero(~current & ~kept[slave]), outside, g_N)
+        near = np.zeros(n, dtype=bool)  # projects onto a candidate (up to EDGE_SLACK)
+        near[slave[outside <= EDGE_SLACK]] = True
+        expected = had | self.closed if iteration == 0 else had
+        self.lost = expected & ~near
+        # the least missed faces of lost nodes compare far misses (rank 3 below): those from
+        # the centroids, as warm starts converge on misses a cold start may not reach
+        self._project(x_s, x_f, np.flatnonzero((self.lost & had)[slave]), outside, g_N, cold=True)
+        # preference: the current face (within FACE_SLACK), an interior projection, a near
+        # miss, the least missed face of a lost node; then the smallest clearance, then the
+        # first reference centroid (TIE)
+        rank = np.where(outside <= TIE, 1, 2)
+        rank[current & (outside <= FACE_SLACK)] = 0
+        rank[outside > EDGE_SLACK] = 3
+        fallback = (self.lost & had)[slave] & np.isfinite(outside)
+        ok = np.flatnonzero(((outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave]))
+                            | fallback)
+        unit = TIE * self.slaves.spacing[slave[ok]]
+        clearance = np.floor(np.where(rank[ok] == 3, outside[ok] / TIE, np.abs(g_N[ok]) / unit))
+        centroid = np.round(self._centroids[cand[ok]] / (1e3 * unit[:, None]))
+        order = ok[np.lexsort((*centroid.T[::-1], clearance, rank[ok], slave[ok]))]
+        chosen = order[np.unique(slave[order], return_index=True)[1]]
+        self._set_elements(chosen, self._xi[chosen])
+
+    def _project(self, x_s: np.ndarray, x_f: np.ndarray, rows: np.ndarray, outside: np.ndarray,
+                 g_N: np.ndarray, cold: bool = False) -> None:
+        """Project the candidates ``rows`` (slave points ``x_s`` (n, gdim) onto the received
+        faces ``x_f`` (n_faces, nn, gdim)) from their last projection points (``cold``: from
+        the centroid); fills ``outside`` and ``g_N`` (n_candidates,) at ``rows``.
+
+        Where Newton fails from a last point, the centroid's answer counts; the next start is
+        still the last point unless that answer converged (so a far miss converges over
+        pairings)."""
+        c, face = self.candidates, self.master.face
+        centroid = np.tile(face.centroid, (len(rows), 1))
+        xi0 = centroid if cold else self._xi[rows]
+        xi, out, g = clearances(face, x_s, x_f, c.slave[rows], c.face[rows], xi0)
+        again = np.flatnonzero(np.isinf(out) & np.any(xi0 != centroid, axis=1))
+        xi_c, out_c, g_c = clearances(face, x_s, x_f, c.slave[rows[again]], c.face[rows[again]],
+                                      centroid[again])
+        won = np.isfinite(out_c)
+        xi[again[won]], out[again[won]], g[again[won]] = xi_c[won], out_c[won], g_c[won]
+        self._xi[rows], outside[rows], g_N[rows] = xi, out, g
+
+    def slave_displacements(self, u: PETSc.Vec) -> np.ndarray:
+        """(n, gdim) displacements of this rank's slave nodes in the system vector ``u``."""
+        return self._slave_gather(u)
+
+    def needs_search(self) -> bool:
+        """Whether a node projects onto none of its candidates since the last search (it
+        may have slid past them all: a new search finds its face, or marks it
+        :attr:`off_surface`).  Local: the caller reduces over ranks."""
+        return bool((self.lost & ~self.off_surface).any())
+
+    def mark_off_surface(self) -> None:
+        """After a search and pairing: nodes still lost have left the master surface."""
+        self.off_surface |= self.lost
+
+    def _set_elements(self, chosen: np.ndarray, xi: np.ndarray) -> None:
+        """Make the chosen candidates (projected at ``xi``) the current elements."""
+        c = self.candidates
+        face_id = self._face_ids[c.face[chosen]] if not self.rigid else np.full(len(chosen), -1)
+        self.elements = Elements(c.slave[chosen], c.face[chosen], c.nodes[chosen], face_id,
+                                 chosen, xi)
+        self._record_initial_gaps()
+
+    def _record_initial_gaps(self) -> None:
+        """At the very first pairing, keep the overclosures of the reference configuration."""
+        if not self._first_pairing:
+            return
+        self._first_pairing = False
+        el = self.elements
+        zero = np.zeros((len(self.slaves.X), self.gdim))
+        n_master = 1 if self.rigid else self._faces[0].size
+        u_master = np.zeros((n_master, self.gdim))
+        g0 = self._kinematics(el, np.arange(len(el.slave)), zero, u_master).g_N
+        self.initial_gap[el.slave] = np.minimum(g0, 0.0)
+
+    # -------------------------------------------------------------- evaluation
+    def evaluate(self, u: PETSc.Vec, u_n: PETSc.Vec, ramp: float = 0.0) -> Elements:
+        """Element forces and tangents at the iterate ``u`` (start of increment ``u_n``).
+
+        ``ramp`` is the share ``1 - tau`` of the initial overclosure still removed from
+        the clearance (first static step, contact-theory.md §3.4).  Collective: every
+        rank gathers, whether or not it has elements.
+        """
+        el = self.elements
+        s = el.slave
+        every = np.arange(len(s))
+        u_slaves = self._slave_gather(u)
+        kin = self._kinematics(el, every, u_slaves, self._gather(u), el.xi)
+        el.xi = kin.xi
+        history = None
+        if self.params.mu > 0.0:
+            history = self.history.take(s)
+            new = np.flatnonzero(~self.in_contact[s])  # first touch: s = 0 from the start state
+            u_s, u_m = self._slave_gather(u_n), self._gather(u_n)  # collective: always gather
+            history.w[new] = self._kinematics(el, new, u_s, u_m, el.xi[new]).w
+            history.g_T[new] = 0.0
+            history.g_p[new] = 0.0
+        self._gap_offset = -ramp * self.initial_gap[s]
+        el.result = evaluate(kin, self.slaves.area[s], self.params, history,
+                             gap_offset=self._gap_offset)
+        self._trial = el.result.trial
+        # the clearance is a difference of coordinates: its round-off, times the tangent
+        size = np.abs(self.slaves.X[s] + u_slaves[s]).max(axis=1, initial=0.0)
+        nd = el.nodes.shape[1] * self.gdim
+        el.roundoff = (np.abs(el.result.K.reshape(-1, nd, nd)).sum(axis=2) * size[:, None]
+                       + np.abs(el.result.f.reshape(-1, nd)))
+        return el
+
+    def _kinematics(self, el: Elements, rows: np.ndarray, u_slaves: np.ndarray,
+                    u_master: np.ndarray, xi0: Optional[np.ndarray] = None) -> Kinematics:
+        """Kinematics of some elements, from gathered slave and master displacements."""
+        s = el.slave[rows]
+        X_s, u_s = self.slaves.X[s], u_slaves[s]
+        if self.rigid:
+            return self.master.kinematics(X_s, u_s, u_master[0])
+        _, X_f = self._faces
+        f = el.face[rows]
+        return face_kinematics(self.master.face, X_s, u_s, X_f[f],
+                               u_master.reshape(X_f.shape)[f], xi0, tangent=self.params.tangent)
+
+    # ---------------------------------------------------------------- history
+    def commit(self) -> None:
+        """Make the trial history of the converged increment the new start state."""
+        s = self.elements.slave
+        self.in_contact[:] = False
+        self.in_contact[s] = True
+        self.closed[:] = False
+        if self.elements.result is not None:
+            self.closed[s] = self.elements.result.status != OPEN
+        if self._trial is not None:
+            fresh = FrictionState.zeros(len(self.in_contact), self.gdim)
+            fresh.put(s, self._trial)
+            self.history = fresh
+
+    def save(self) -> tuple:
+        return self.history.copy(), self.in_contact.copy(), self.closed.copy()
+
+    def restore(self, saved: tuple) -> None:
+        self.history, self.in_contact, self.closed = (a.copy() for a in saved)
+
+    def contact_state(self) -> np.ndarray:
+        """(n, 2): status and master face id of every slave node on this rank ((-1, -1)
+        without an element; face -1 on a rigid master)."""
+        state = np.full((len(self.slaves.nodes), 2), -1, dtype=np.int64)
+        el = self.elements
+        if el.result is not None:
+            state[el.slave, 0] = el.result.status
+            state[el.slave, 1] = el.face_id
+        return state
+
+    def counts(self) -> tuple[int, int]:
+        """Slave nodes in contact (closed) and in slip, on this rank."""
+        r = self.elements.result
+        if r is None:
+            return 0, 0
+        closed = r.status != OPEN
+        return int(closed.sum()), int((closed & (r.status == SLIP)).sum())
+
+    def penetration(self) -> float:
+        """Largest overclosure the law acts on (the clearance plus the ramp offset of an
+        initial overclosure, §3.4), on this rank, relative to the slave node's spacing."""
+        r = self.elements.result
+        if r is None or len(r.g_N) == 0:
+            return 0.0
+        return float(np.max(-(r.g_N + self._gap_offset) / self.slaves.spacing[self.elements.slave]))
+
+    def detached(self) -> int:
+        """Nodes on this rank that were closed at the last commit and project onto no
+        master face even after a search in this increment: they slid off the master
+        surface (meaningful after convergence, before commit)."""
+        return int((self.closed & self.off_surface).sum())
+
+
+def _face_size(x_faces: np.ndarray) -> np.ndarray:
+    """Largest distance of a face node from the face centroid."""
+    c = x_faces.mean(axis=1, keepdims=True)
+    return np.linalg.norm(x_faces - c, axis=2).max(axis=1) if len(x_faces) else np.zeros(0)
+
+
+def _nearest_faces(x_slaves: np.ndarray, x_faces: np.ndarray, k: int
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """(slave, face) pairs: the ``k`` faces with the nearest centroids."""
+    if len(x_slaves) == 0 or len(x_faces) == 0:
+        return np.zeros(0, int), np.zeros(0, int)
+    k = min(k, len(x_faces))
+    # no distance bound: a node driven deep into the master (by a large increment or an
+    # initial overlap) keeps its candidates; projection and cutoff decide on elements
+    dist, face = cKDTree(x_faces.mean(axis=1)).query(x_slaves, k=k)
+    slave = np.repeat(np.arange(len(x_slaves)), k)
+    face, dist = face.reshape(-1), dist.reshape(-1)
+    found = np.isfinite(dist)
+    return slave[found], face[found]

@@ -1,0 +1,432 @@
+"""Linear solves of the Newton iteration.
+
+The default solver is MUMPS (LU; LDL^T where the Jacobian is symmetric) with the
+factorisation kept (``reuse``): it preconditions GMRES for later Jacobians.  In small
+strain only the contact part, supported on the contact surface, changes between
+iterations, so a few Krylov iterations of back-solves replace a factorisation (1.46x
+faster at 67k dofs, same Newton iterations: benchmarks/RESULTS.md); GMRES stops at the
+relative residual the caller asks (Newton's: :func:`~dolfinx_friction.nls.newton.forcing`).
+It is kept across increments, also when a search changed the matrix pattern (the old
+factors precondition the new matrix: 6-12 GMRES iterations on the 35k-dof sliding block),
+and refactorised when GMRES does not converge within ``max_krylov`` iterations; then the
+next :data:`PAUSE` Jacobians are factorised afresh as well (a stiff contact change can
+need many Krylov iterations).  Keeping pays only where a factorisation costs many
+back-solves: MUMPS's own counts (elimination flops RINFOG(3) against factor
+entries INFOG(20)) decide, at least :data:`PAYBACK` back-solves; small 2D problems
+factorise in milliseconds and are factorised every time.  A fresh factorisation is a
+plain direct solve.  Every decision depends on counts, never on timings: runs are
+repeatable.
+A direct solve is checked: a factorisation that failed (a zero pivot) or a solution that
+leaves a linear residual above :data:`SINGULAR` of the right-hand side means a singular
+Jacobian (a body that only the contact held, and the contact opened): the solve fails
+with that reason (:attr:`LinearSolver.failure`), and Newton with it.
+Where the Jacobian splits into a constant bulk stiffness ``K`` and a contact tangent ``C``
+(:meth:`~dolfinx_friction.fem.block_problem.BlockProblem.split`: linear bodies, serial), the solve
+can keep ``K``'s factorisation for the whole run instead (:class:`Condensed`): with ``A``
+the dofs where ``C`` is not zero, ``G = (K^-1)_AA`` (one back-solve per dof the first time
+it is active), ``x = K^-1 (b - P_A w)``, ``(I + C_AA G) w = C_AA (K^-1 b)_A`` (Woodbury's
+identity), as the preconditioner of Richardson iterations on ``J`` (applied as
+``K v + C v``, never assembled) until the true residual is below 1e-10 ``|b|`` (one
+iteration on the Hertz benchmark; reactions as with LU to 1e-12).  It is used while its
+flops so far (columns of ``G``, back-solves, dense solves; MUMPS's counts) stay below
+those of the solves it replaced plus :data:`INVESTMENT` of them, else the path above is
+taken.  What a solve by that path costs is its flops per solve so far (factorisations,
+and back-solves with a kept one: a block of 16k dofs whose kept factorisation needs 13
+GMRES iterations per Jacobian costs a third of a factorisation per solve, and 1,000
+columns of ``G`` would not pay back there), known once that path solved (with a
+factorisation it keeps: once that preconditioned a solve); ``K`` is factorised only if
+``G``'s columns, at that path's back-solve flops, could pay (on a 35k-dof 3D block they
+cannot: 0.67 s of factorisation was spent for nothing).
+Serial only: under MPI the path above.
+``symmetric=True`` (without user ``options``: Jacobians with the constrained rows and
+columns eliminated, of frictionless contact between linear bodies,
+:attr:`BlockProblem.symmetric`) factorises LDL^T (MUMPS, symmetric indefinite, from the
+upper triangle): half the flops and entries of LU (0.28 against 0.42 s on a 16k-dof 3D
+block).  The condensed path's ``K`` is factorised so whenever it is symmetric (linear
+bodies, friction or not).  Their counts are doubled to LU's for every decision above.
+``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
+default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
+LU or LDL^T factorisation is kept (``reuse`` is ignored for other preconditioners); one by
+a solver other than MUMPS is kept whatever it cost.  Options go through PETSc's options
+database under a prefix of the solver's own (``prefix`` plus a serial number, while the
+solver lives): its defaults, the given ``options`` over them, and over both every option the
+database has under ``prefix`` (the command line's win).  So two live solvers never read each
+other's options.
+"""
+from __future__ import annotations
+
+import itertools
+import weakref
+from typing import Optional
+
+import numpy as np
+from petsc4py import PETSc
+
+from dolfinx_friction import _compat as compat
+
+DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+#: GMRES's relative residual with a kept factorisation, unless the caller asks otherwise
+KRYLOV_RTOL = 1e-12
+REUSE = {"ksp_type": "gmres", "ksp_gmres_restart": 20, "ksp_atol": 0.0,
+         "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}  # max_it: ``max_krylov``
+#: Jacobians factorised afresh after GMRES failed with a kept factorisation.
+PAUSE = 3
+#: Keep a factorisation only if it costs at least this many back-solves (in flops).
+PAYBACK = 100
+#: A direct solve whose linear residual exceeds this share of the right-hand side's norm
+#: found no solution: the Jacobian is singular (measured on well-posed scenes: <= 1e-11).
+SINGULAR = 1e-6
+
+
+class LinearSolver:
+    """Solves ``J x = b`` for a sequence of Jacobians, with PETSc options under ``prefix``."""
+
+    def __init__(self, comm, prefix: str = "dolfinx_friction_", reuse: Optional[bool] = None,
+                 options: Optional[dict] = None, max_krylov: int = 20, symmetric: bool = False):
+        if reuse is None:
+            reuse = options is None
+        options = options or {}
+        defaults = {**(REUSE if reuse else DIRECT),
+                    **({"pc_type": "cholesky"} if symmetric and not options else {})}
+        # they stay while this solver may factorise (MUMPS reads its own then)
+        own, written = private_options(prefix, {**defaults, **options})
+        weakref.finalize(self, forget_options, written).atexit = False
+        self.ksp = self._new_ksp(comm, own)
+        pc = self.ksp.getPC()
+        #: the Jacobians must be symmetric (:meth:`BlockProblem.jacobian` with ``symmetric``)
+        self.symmetric = pc.getType() in ("cholesky", "icc")
+        # only a factorisation is kept; only MUMPS reports what it cost
+        self.reuse, self.max_krylov = reuse and pc.getType() in ("lu", "cholesky"), max_krylov
+        self._counted = self.reuse and pc.getFactorSolverType() == "mumps"
+        self._factored_size: Optional[tuple] = None  # of the matrix last factorised
+        self._paused = 0  # Jacobians still to factorise afresh
+        self._pays = False  # the last factorisation is worth keeping
+        self._solve_flops = 0.0  # of one back-solve with the last factorisation
+        #: flops and solves of this path so far (factorisations, back-solves), the cost
+        #: per solve the condensed path is measured against
+        self._spent, self._solves = 0.0, 0
+        self.factorisations = 0
+        self.krylov_iterations = 0
+        #: why the last solve failed ("" if it did not)
+        self.failure = ""
+        self._condensed: Optional[Condensed] = None
+        self.condensed_solves = 0
+
+    @staticmethod
+    def _new_ksp(comm, prefix: str) -> PETSc.KSP:
+        """A KSP set from the options database under this solver's own ``prefix``."""
+        ksp = PETSc.KSP().create(comm)
+        ksp.setOptionsPrefix(prefix)
+        ksp.setFromOptions()
+        return ksp
+
+    def settings(self) -> dict:
+        """The solver in use: ``ksp_type`` (``gmres`` on a kept factorisation, when one is
+        kept), ``pc_type``, ``factor_solver_type`` (factorisations only),
+        ``reuse_factorisation``."""
+        pc = self.ksp.getPC()
+        out = {"ksp_type": "gmres" if self.reuse else self.ksp.getType(),
+               "pc_type": pc.getType()}
+        if pc.getType() in ("lu", "cholesky", "ilu", "icc"):
+            out["factor_solver_type"] = pc.getFactorSolverType()
+        out["reuse_factorisation"] = self.reuse
+        return out
+
+    def solve_split(self, split, b: PETSc.Vec, x: PETSc.Vec) -> Optional[bool]:
+        """Solve with the Jacobian given as bulk plus contact
+        (:class:`~dolfinx_friction.fem.block_problem.JacobianSplit`) by :class:`Condensed`; None when
+        that does not pay (or failed): then :meth:`solve` with the assembled Jacobian."""
+        if not (self.reuse and self._counted) or self._solves < (2 if self._pays else 1):
+            return None  # priced once this path solved (with a factorisation it keeps: twice)
+        if self._condensed is None:
+            self._condensed = Condensed(b.getComm(), self.ksp.getOptionsPrefix(),
+                                        split.symmetric)
+        if not self._condensed.solve(split, b, x, self._spent / self._solves,
+                                     self._solve_flops):
+            return None
+        self.condensed_solves += 1
+        return True
+
+    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL
+              ) -> bool:
+        """Solve; returns False when the solver failed (:attr:`failure` says why).
+        ``rtol``: the relative residual GMRES stops at with a kept factorisation."""
+        keep = (self.reuse and self._pays and not self._paused
+                and J.getSize() == self._factored_size)
+        self._paused = max(self._paused - 1, 0)
+        ok = self._attempt(J, b, x, keep, rtol)
+        if ok or not keep:
+            return ok
+        self._paused = PAUSE
+        return self._attempt(J, b, x, False, rtol)
+
+    def _attempt(self, J, b, x, keep: bool, rtol: float) -> bool:
+        """One solve, with the kept factorisation or a fresh one; whether it converged."""
+        self.failure = ""
+        if self.reuse:
+            self.ksp.setType("gmres" if keep else "preonly")
+            self.ksp.setTolerances(rtol=rtol, max_it=self.max_krylov)
+        self.ksp.setOperators(J, J)
+        self.ksp.getPC().setReusePreconditioner(keep)
+        self.ksp.solve(b, x)
+        if not keep:
+            self.factorisations += 1
+            self._factored_size = J.getSize()
+            self._pays = self.reuse
+            if self._counted:
+                F = self.ksp.getPC().getFactorMatrix()
+                flops, self._solve_flops = _costs(F, self.symmetric)
+                self._pays = flops >= PAYBACK * self._solve_flops
+                self._spent += flops
+        self.krylov_iterations += self.ksp.getIterationNumber()
+        self._spent += max(self.ksp.getIterationNumber(), 1) * self._solve_flops
+        self._solves += 1
+        reason = self.ksp.getConvergedReason()
+        if reason == compat.ksp_pc_failed():
+            self.failure = "singular Jacobian (the factorisation met a zero pivot)"
+            # never solve with (or keep) a failed factorisation: MUMPS then fails in its
+            # solve phase (INFOG(1) = -3) on the next Jacobian, seen under MPI
+            self._factored_size, self._pays = None, False
+            prefix = self.ksp.getOptionsPrefix()
+            self.ksp.destroy()
+            self.ksp = self._new_ksp(b.getComm(), prefix)
+        elif reason > 0 and self.ksp.getType() == "preonly":
+            r = b.duplicate()
+            J.mult(x, r)
+            r.axpy(-1.0, b)
+            residual, scale = r.norm(), b.norm()
+            r.destroy()
+            if not residual <= SINGULAR * scale:
+                self.failure = (f"singular Jacobian (the linear residual is {residual:.2e} of "
+                                f"{scale:.2e}: a body that nothing holds?)")
+        elif reason <= 0:
+            self.failure = f"the linear solver failed ({reason})"
+        return reason > 0 and not self.failure
+
+
+def write_options(prefix: str, options: dict) -> list[str]:
+    """Write ``options`` into PETSc's options database under ``prefix`` where it does not
+    have them yet (the command line wins); returns the names written."""
+    opts, written = PETSc.Options(), []
+    for key, value in options.items():
+        if not opts.hasName(prefix + key):
+            opts[prefix + key] = value
+            written.append(prefix + key)
+    return written
+
+
+_SERIAL = itertools.count()
+
+
+def private_options(prefix: str, options: dict) -> tuple[str, list[str]]:
+    """Write ``options`` into PETSc's options database under a new prefix of their own
+    (``prefix`` plus a serial number), each replaced by the database's value under
+    ``prefix`` where it has one, together with every other option it has there (the command
+    line wins); returns the new prefix and the names written."""
+    own = f"{prefix}{next(_SERIAL)}_"
+    database = PETSc.Options().getAll()
+    given = {**options, **{name[len(prefix):]: value for name, value in database.items()
+                           if name.startswith(prefix) and not name[len(prefix):][:1].isdigit()}}
+    return own, write_options(own, given)
+
+
+def forget_options(names: list[str]) -> None:
+    """Remove options that :func:`write_options` wrote: a later solver in the process
+    must not inherit them."""
+    opts = PETSc.Options()
+    for name in names:
+        opts.delValue(name)
+
+
+def _entries(F: PETSc.Mat) -> float:
+    """Entries of a MUMPS factorisation (at least 1)."""
+    entries = F.getMumpsInfog(20)  # negative: millions
+    return max(entries if entries >= 0 else -entries * 1e6, 1.0)
+
+
+def _costs(F: PETSc.Mat, symmetric: bool) -> tuple[float, float]:
+    """The flops of a MUMPS factorisation and of a back-solve with it (4 per entry), counted
+    as for LU: an LDL^T's doubled (its one triangle is both), so that every decision is the
+    one LU's counts would take."""
+    scale = 2.0 if symmetric else 1.0
+    return scale * F.getMumpsRinfog(3), scale * 4.0 * _entries(F)
+
+
+#: The condensed path may spend at most this many solves' flops more than the solves it
+#: replaced (the columns of ``G`` are paid before they pay back).
+INVESTMENT = 4
+#: Columns of ``K^-1`` computed per back-solve call (dense right-hand sides).
+COLUMNS_PER_SOLVE = 64
+
+
+class Condensed:
+    """Solves ``(K + C) x = b`` with ``K``'s factorisation kept and ``C`` of low rank.
+
+    ``G``, the entries of ``K^-1`` among the contact surfaces' dofs, is filled column by
+    column as dofs become active and kept while ``K`` (the same matrix object) does; the
+    whole columns ``K^-1 P`` too while they take no more entries than ``K``'s factors
+    (then ``K^-1 (r - P_A w) = K^-1 r - (K^-1 P_A) w`` needs one back-solve instead of two).
+    """
+
+    def __init__(self, comm, prefix: str, symmetric: bool = False):
+        self.bulk = PETSc.KSP().create(comm)
+        self.bulk.setOptionsPrefix(prefix + "bulk_")
+        self.bulk.setType("preonly")
+        pc = self.bulk.getPC()
+        self.symmetric = symmetric
+        pc.setType("cholesky" if symmetric else "lu")
+        pc.setFactorSolverType("mumps")
+        self.bulk.setFromOptions()
+        self.outer = PETSc.KSP().create(comm)
+        self.outer.setOptionsPrefix(prefix + "condensed_")
+        self.outer.setType("richardson")
+        self.outer.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
+        self.outer.setTolerances(rtol=1e-10, atol=0.0, max_it=10)
+        pc = self.outer.getPC()
+        pc.setType("python")
+        pc.setPythonContext(self)
+        self.outer.setFromOptions()
+        self._K: Optional[PETSc.Mat] = None
+        self._regular = False  # K's factorisation succeeded
+        self._J: Optional[PETSc.Mat] = None
+        self._Z: Optional[list] = None
+        self._solve_flops = 0.0
+        self._y: Optional[PETSc.Vec] = None
+        self._dofs = np.zeros(0, np.int64)
+        self._G = np.zeros((0, 0))
+        self._known = np.zeros(0, bool)  # per surface dof: its column of G is computed
+        self._column = np.zeros(0, np.int64)  # per surface dof: its column in _G
+        self.columns = 0  # back-solves spent on G
+        self.solves = 0  # solves done, each instead of a factorisation
+        self._spent = 0.0  # flops spent on them (estimated)
+        self.iterations = 0  # Richardson iterations
+
+    def _factorise(self, K: PETSc.Mat) -> bool:
+        """Factorise ``K``; whether MUMPS succeeded."""
+        self._K = K
+        self.bulk.setOperators(K, K)
+        self.bulk.setUp()
+        F = self.bulk.getPC().getFactorMatrix()
+        if F.getMumpsInfog(1) < 0:
+            return False
+        _, self._solve_flops = _costs(F, self.symmetric)
+        self._entries = _entries(F)  # whole columns of K^-1 are kept while they fit
+        self._J = None  # the operator K + C
+        self._dofs = np.zeros(0, np.int64)
+        self._y = K.createVecLeft()
+        return True
+
+    def _set_dofs(self, dofs: np.ndarray) -> None:
+        """The surface dofs ``G`` is kept on (all its columns are forgotten when they
+        change, or when ``K`` is factorised again)."""
+        if not np.array_equal(dofs, self._dofs):
+            self._dofs, self._G = dofs, np.zeros((len(dofs), 0))
+            self._known = np.zeros(len(dofs), bool)
+            self._column = np.zeros(len(dofs), np.int64)
+            self._Z = []
+
+    def _add_columns(self, where: np.ndarray) -> None:
+        """Columns of ``K^-1`` of the surface dofs at ``where``, restricted to the surface
+        dofs, appended to ``G``."""
+        F = self.bulk.getPC().getFactorMatrix()
+        n = self._K.getSize()[0]
+        new = []
+        for start in range(0, len(where), COLUMNS_PER_SOLVE):
+            chunk = where[start:start + COLUMNS_PER_SOLVE]
+            rhs = np.zeros((n, len(chunk)), order="F")
+            rhs[self._dofs[chunk], np.arange(len(chunk))] = 1.0
+            B = PETSc.Mat().createDense((n, len(chunk)), array=rhs, comm=PETSc.COMM_SELF)
+            X = PETSc.Mat().createDense((n, len(chunk)), comm=PETSc.COMM_SELF)
+            X.setUp()
+            F.matSolve(B, X)
+            full = X.getDenseArray()
+            new.append(full[self._dofs].copy())
+            if self._Z is not None:
+                self._Z.append(full.copy())
+            B.destroy()
+            X.destroy()
+        self._column[where] = self._G.shape[1] + np.arange(len(where))
+        self._known[where] = True
+        self._G = np.hstack([self._G] + new)
+        self.columns += len(where)
+        if self._Z is not None and n * self._G.shape[1] > self._entries:
+            self._Z = None  # no more memory for whole columns than the factors take
+
+    def solve(self, split, b: PETSc.Vec, x: PETSc.Vec, replaced: float,
+              solve_flops: float) -> bool:
+        """Solve with the kept bulk factorisation; False (``x`` undefined) when this path
+        does not pay here or did not converge: the caller solves another way.  ``replaced``:
+        the flops of a solve by the other path, ``solve_flops``: of a back-solve there
+        (``K``'s estimate before it is factorised)."""
+        coupled = np.zeros(split.bulk.getSize()[0], bool)
+        coupled[split.rows] = coupled[split.cols] = True
+        active = np.flatnonzero(coupled)
+
+        def cost(columns: int, per_column: float) -> float:
+            """Flops of this solve: new columns of G, back-solves, the dense solves."""
+            return (columns + 8) * per_column + 2.0 / 3.0 * len(active) ** 3
+
+        budget = replaced * (self.solves + 1 + INVESTMENT) - self._spent
+        if split.bulk is not self._K:
+            # all of G's columns at the other path's back-solve flops: if they do not pay,
+            # K's factorisation is not paid either
+            if cost(len(active), solve_flops) > budget:
+                return False
+            self._regular = self._factorise(split.bulk)
+        if not self._regular:  # e.g. a body held by the contact alone: K is singular
+            return False
+        self._set_dofs(split.dofs)
+        where = np.searchsorted(self._dofs, active).clip(max=max(len(self._dofs) - 1, 0))
+        if len(active) and (not len(self._dofs) or (self._dofs[where] != active).any()):
+            return False  # a coupling off the surfaces: not the split assumed
+        new = where[~self._known[where]]
+        flops = cost(len(new), self._solve_flops)
+        if flops > budget:
+            return False
+        self._spent += flops
+        if len(new):
+            self._add_columns(new)
+        n = len(active)
+        position = np.cumsum(coupled) - 1  # of each active dof among them
+        C = np.bincount(position[split.rows] * n + position[split.cols], weights=split.values,
+                        minlength=n * n).reshape(n, n)
+        cols = self._column[where]
+        self._active, self._C = active, C
+        self._cols = cols
+        if self._Z is not None and len(self._Z) > 1:
+            self._Z = [np.hstack(self._Z)]
+        self._M = np.eye(n) + C @ self._G[np.ix_(where, cols)]
+        if self._J is None:
+            self._J = PETSc.Mat().createPython(self._K.getSizes(), self, comm=self._K.getComm())
+            self._J.setUp()
+        self.outer.setOperators(self._J, self._J)
+        try:
+            self.outer.solve(b, x)
+        except (PETSc.Error, np.linalg.LinAlgError):  # I + C G singular: J is, or nearly
+            return False
+        self.iterations += self.outer.getIterationNumber()
+        ok = self.outer.getConvergedReason() > 0
+        self.solves += ok
+        return ok
+
+    def mult(self, mat, v: PETSc.Vec, y: PETSc.Vec) -> None:
+        """``y = (K + C) v``: the Jacobian, without assembling it."""
+        self._K.mult(v, y)
+        values = y.getArray().copy()
+        values[self._active] += self._C @ v.getArray(readonly=True)[self._active]
+        y.setArray(values)
+
+    def apply(self, pc, r: PETSc.Vec, z: PETSc.Vec) -> None:
+        """``z = (K + C)^-1 r`` (up to round-off): the preconditioner."""
+        y = self._y
+        self.bulk.solve(r, y)
+        w = np.linalg.solve(self._M, self._C @ y.getArray(readonly=True)[self._active])
+        if self._Z:  # K^-1 (r - P_A w) = y - (K^-1 P_A) w, from the kept columns
+            w_all = np.zeros(self._Z[0].shape[1])
+            w_all[self._cols] = w
+            z.setArray(y.getArray(readonly=True) - self._Z[0] @ w_all)
+            return
+        values = r.getArray(readonly=True).copy()
+        values[self._active] -= w
+        y.setArray(values)
+        self.bulk.solve(y, z)

@@ -1,0 +1,301 @@
+"""Newton's method for one increment of a :class:`~dolfinx_friction.BlockProblem`, or
+PETSc SNES instead.
+
+Each iteration pairs the contacts at the accepted iterate (in their first
+``pairing_iterations`` iterations), evaluates the residual and, unless converged,
+solves with the Jacobian.  Converged (``convergence="residual"``, the default): the
+residual norm is below ``max(rtol r_0, atol)`` or below its round-off floor.
+``convergence="reactions"`` also stops when the reactions and the displacements no
+longer change (:func:`settled`).  The line search halves the step (at most 5 times,
+the pairing frozen) while the residual norm does not decrease.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx_friction.nls.linear import (KRYLOV_RTOL, LinearSolver, forget_options,
+                                     write_options)
+from dolfinx_friction.scene.model import CONVERGENCE, STALL_ITERATIONS
+from dolfinx_friction.fem.block_problem import BlockProblem
+
+
+@dataclass
+class NewtonTrace:
+    """One Newton solve: ``residuals[k]`` is the residual norm at iterate k; in iteration
+    k + 1, ``status_changes[k]`` slave nodes changed their contact status (open, stick,
+    slip), ``face_changes[k]`` others only their master face, and the line search halved
+    the step ``backtracks[k]`` times, its correction was ``corrections[k]`` (max norm)
+    and the reactions changed by ``reaction_changes[k]`` (recorded with
+    ``convergence="reactions"`` only); ``reason``: why it stopped unconverged, where known
+    (a singular Jacobian)."""
+
+    converged: bool = False
+    residuals: list[float] = field(default_factory=list)
+    corrections: list[float] = field(default_factory=list)
+    reaction_changes: list[float] = field(default_factory=list)
+    status_changes: list[int] = field(default_factory=list)
+    face_changes: list[int] = field(default_factory=list)
+    backtracks: list[int] = field(default_factory=list)
+    reason: str = ""
+
+    @property
+    def iterations(self) -> int:
+        return len(self.backtracks)
+
+
+class Newton:
+    """Newton iterations from :attr:`BlockProblem.x` (contacts begun) to convergence.
+
+    ``prefix`` and ``petsc_options`` set the linear solver (default MUMPS, with the
+    factorisation kept as GMRES preconditioner where only contact changes the Jacobian:
+    see :mod:`dolfinx_friction.nls.linear`).  ``convergence``: ``"residual"`` (the residual
+    norm test alone) or ``"reactions"`` (that test, or the reactions and displacements
+    settled to ``reaction_tol``: :func:`settled`).  ``stall``: with ``solve(may_stall=True)``,
+    give up after that many iterations without a new lowest residual (0: never; default
+    :data:`~dolfinx_friction.scene.model.STALL_ITERATIONS`).
+    """
+
+    def __init__(self, rtol: float = 1e-9, atol: float = 1e-10, max_iterations: int = 30,
+                 line_search: bool = True, prefix: str = "dolfinx_friction_",
+                 petsc_options: Optional[dict] = None,
+                 reuse_factorisation: Optional[bool] = None,
+                 convergence: str = "residual", reaction_tol: float = 1e-5,
+                 stall: int = STALL_ITERATIONS):
+        if convergence not in CONVERGENCE:
+            raise ValueError(f"convergence = {convergence!r}: must be one of "
+                             f"{', '.join(map(repr, CONVERGENCE))}")
+        self.convergence, self.reaction_tol = convergence, reaction_tol
+        self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
+        self.line_search = line_search
+        self.stall = stall
+        self.prefix, self.petsc_options = prefix, petsc_options
+        self.reuse_factorisation = reuse_factorisation
+        self.linear: Optional[LinearSolver] = None
+
+    def _solver(self, problem: BlockProblem) -> LinearSolver:
+        if self.linear is None:
+            reuse = self.reuse_factorisation
+            if reuse is None and self.petsc_options is None:
+                reuse = problem.linear  # a kept factorisation pays where only contact changes
+            self.linear = LinearSolver(problem.comm, self.prefix, reuse, self.petsc_options,
+                                       symmetric=problem.symmetric)
+        return self.linear
+
+    @staticmethod
+    def _evaluate(problem: BlockProblem, pairing: bool, last: Optional[float] = None) -> float:
+        """Update the contacts at :attr:`BlockProblem.x` and return the residual norm;
+        ``last``: the norm of the residual already in :attr:`BlockProblem.b` for this
+        ``x``, kept when no contact was evaluated anew (the pairing did not change)."""
+        evaluations = [c.evaluations for c in problem.contacts]
+        with problem.timers.measure("contact_search"):
+            for c in problem.contacts:
+                c.update(problem.x, pairing=pairing)
+        if last is not None and evaluations == [c.evaluations for c in problem.contacts]:
+            return last
+        return problem.residual(problem.x, problem.b)
+
+    def solve(self, problem: BlockProblem, start: Optional[PETSc.Vec] = None,
+              may_stall: bool = False) -> NewtonTrace:
+        """Iterate from :attr:`BlockProblem.x` to convergence; ``start``: the converged
+        state the increment starts from (default: ``x`` on entry), the scale of the
+        displacement test of ``convergence="reactions"``; ``may_stall``: give up after
+        :attr:`stall` iterations without a new lowest residual (where the caller can cut
+        back: :func:`~dolfinx_friction.nls.stepping.solve_steps` while cutbacks are left;
+        else only ``max_iterations`` stops it)."""
+        x, b = problem.x, problem.b
+        dx = x.duplicate()
+        settling = self.convergence == "reactions"
+        x_n = (x.copy() if start is None else start) if settling else None
+        trace = NewtonTrace()
+        before, reactions, floor, evaluated = None, None, 0.0, None
+        best, best_at = np.inf, 1  # the lowest residual after the first step
+        for it in range(self.max_iterations + 1):
+            norm = self._evaluate(problem, True, evaluated)  # pairing at the accepted iterate
+            trace.residuals.append(norm)
+            now = [c.pairing() for c in problem.contacts]
+            if before is not None:
+                _record_changes(problem, before, now, trace)
+            before = now
+            if not np.isfinite(norm):
+                break
+            if settling:
+                reactions = self._reactions(problem, reactions, trace)
+            if it and norm < best:
+                best, best_at = norm, it
+            target = max(self.rtol * trace.residuals[0], self.atol)
+            floor = _floor_if_near(problem, norm, target, floor, it == 0)
+            if norm <= max(target, floor) or (
+                    settling and settled(trace, problem, x, x_n, reactions, self.reaction_tol)):
+                trace.converged = True
+                break
+            if it == self.max_iterations:
+                break
+            if may_stall and 0 < self.stall <= it - best_at:
+                trace.reason = f"no new lowest residual in {self.stall} iterations"
+                break
+            solver = self._solver(problem)
+            split = problem.split() if solver.reuse else None
+            with problem.timers.measure("linear_solve"):
+                solved = solver.solve_split(split, b, dx) if split is not None else None
+            if solved is None:  # no split, or it did not pay: the whole Jacobian
+                A = problem.jacobian(x, symmetric=solver.symmetric)
+                with problem.timers.measure("linear_solve"):
+                    solved = solver.solve(A, b, dx, forcing(norm, trace.residuals[0], target))
+            if not solved:
+                trace.backtracks.append(0)
+                trace.reason = self.linear.failure
+                break
+            x.axpy(-1.0, dx)
+            trace.corrections.append(dx.norm(PETSc.NormType.NORM_INFINITY))
+            halvings, evaluated = (self._line_search(problem, dx, norm, target, floor)
+                                   if self.line_search else (0, None))
+            trace.backtracks.append(halvings)
+        dx.destroy()
+        if settling and start is None:
+            x_n.destroy()
+        problem.scatter()
+        return trace
+
+    @staticmethod
+    def _reactions(problem: BlockProblem, last: Optional[np.ndarray],
+                   trace: NewtonTrace) -> np.ndarray:
+        """The internal forces of the constrained rows (the reactions) at this iterate;
+        records their largest change since ``last`` (all ranks)."""
+        now = problem.internal[problem.constrained_rows]
+        if last is not None:
+            change = float(np.abs(now - last).max(initial=0.0))
+            trace.reaction_changes.append(problem.comm.allreduce(change, op=MPI.MAX))
+        return now
+
+    def _line_search(self, problem: BlockProblem, dx: PETSc.Vec, norm0: float,
+                     target: float, floor: float) -> tuple[int, Optional[float]]:
+        """Halve the step ``x <- x - dx`` while the residual (pairing frozen) does not
+        decrease and is not converged (at round-off it need not decrease); returns the
+        halvings and the residual norm at the accepted ``x`` (None: not evaluated)."""
+        alpha = 1.0
+        for halvings in range(5):
+            norm = self._evaluate(problem, False)
+            floor = _floor_if_near(problem, norm, target, floor, False)
+            if norm <= max((1.0 - 1e-4 * alpha) * norm0, target, floor):
+                return halvings, norm
+            alpha *= 0.5
+            problem.x.axpy(alpha, dx)  # back from x - 2 alpha dx to x - alpha dx
+        return 5, None
+
+
+#: the largest relative linear residual of a Newton step (:func:`forcing`): 1e-5 already
+#: costs a Newton iteration on the 16k-dof frictional block, 1e-6 none
+FORCING_MAX = 1e-6
+
+
+def forcing(norm: float, first: float, target: float) -> float:
+    """The relative linear residual a Newton step at residual ``norm`` may leave (inexact
+    Newton; ``first``: the increment's first residual, ``target``: the one that converges):
+    ``0.1 norm / first`` (the next residual is at most that share of ``norm`` plus Newton's
+    quadratic term: the iteration stays quadratic relative to ``first``), or ``0.1 target /
+    norm`` where that is larger (a step need not be more accurate than the target asks);
+    at most :data:`FORCING_MAX`, at least :data:`~dolfinx_friction.nls.linear.KRYLOV_RTOL`.  A
+    kept factorisation's GMRES then needs fewer iterations."""
+    if not (first > 0.0 and norm > 0.0):
+        return KRYLOV_RTOL
+    return max(KRYLOV_RTOL, min(FORCING_MAX, max(0.1 * norm / first, 0.1 * target / norm)))
+
+
+#: the round-off floor is computed again when the residual norm comes within this factor
+#: of the last one computed (it changes little within an increment: |x| and the contact
+#: forces change by the increment), and at the increment's first iterate
+FLOOR_MARGIN = 100.0
+
+
+def _floor_if_near(problem: BlockProblem, norm: float, target: float, floor: float,
+                   first: bool) -> float:
+    """The residual's round-off floor (:meth:`BlockProblem.roundoff_floor`) where it may
+    decide convergence, else the last one computed: an |J| |x| product saved per
+    evaluation.  ``norm`` is the same on every rank, so all of them compute it or none."""
+    if first or (target < norm <= FLOOR_MARGIN * floor):
+        return problem.roundoff_floor()
+    return floor
+
+
+def settled(trace: NewtonTrace, problem: BlockProblem, x: PETSc.Vec, x_n: PETSc.Vec,
+            reactions: np.ndarray, tol: float) -> bool:
+    """The test of ``convergence="reactions"`` at iterate k >= 2 (collective).
+
+    With ``F`` the force scale (the largest reaction or external force) and ``u`` the
+    increment's largest displacement ``|x - x_n|``: no slave node changed its contact
+    status or master face and the line search took the whole step; the largest
+    unbalanced force (residual) is below ``tol F``; the corrections contract (theta =
+    ``|dx_k| / |dx_k-1|`` < 1, max norms) and the changes still to come, estimated as
+    theta / (1 - theta) times the last ones (a contraction's a posteriori bound), are
+    below ``tol u`` for the displacements and ``tol F`` for the reactions.
+    """
+    if len(trace.corrections) < 2 or trace.status_changes[-1] or trace.face_changes[-1] \
+            or trace.backtracks[-1]:
+        return False
+    last, before = trace.corrections[-1], trace.corrections[-2]
+    theta = last / before if before > 0.0 else 0.0
+    if theta >= 1.0:
+        return False
+    force = max(float(np.abs(reactions).max(initial=0.0)),
+                float(np.abs(problem.f_ext).max(initial=0.0)))
+    force = problem.comm.allreduce(force, op=MPI.MAX)
+    if not problem.b.norm(PETSc.NormType.NORM_INFINITY) <= tol * force:
+        return False
+    moved = x_n.copy()
+    moved.axpy(-1.0, x)
+    u = moved.norm(PETSc.NormType.NORM_INFINITY)
+    moved.destroy()
+    ahead = theta / (1.0 - theta)
+    return ahead * last <= tol * u and ahead * trace.reaction_changes[-1] <= tol * force
+
+
+def _record_changes(problem: BlockProblem, before: list, now: list, trace: NewtonTrace) -> None:
+    """Count (all ranks) the slave nodes whose status, or else only master face, changed."""
+    counts = np.zeros(2, dtype=np.int64)
+    for old, new in zip(before, now):
+        differs = old != new
+        counts += differs[:, 0].sum(), (differs[:, 1] & ~differs[:, 0]).sum()
+    status, face = problem.comm.allreduce(counts)
+    trace.status_changes.append(int(status))
+    trace.face_changes.append(int(face))
+
+
+def snes_solve(problem: BlockProblem, prefix: str = "dolfinx_friction_snes_",
+               options: Optional[dict] = None) -> int:
+    """Solve an increment with PETSc SNES (``newtonls`` unless the options say otherwise;
+    every SNES/KSP option and monitor under ``prefix`` applies).  The contacts must have
+    begun; they are paired at every residual evaluation, without a new search (the
+    couplings stay those of :meth:`BlockProblem.matrix`).  Returns SNES's converged
+    reason (> 0: converged)."""
+    defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "ksp_type": "preonly",
+                "pc_type": "lu", "pc_factor_mat_solver_type": "mumps", "snes_rtol": 1e-9,
+                "snes_atol": 1e-10}
+    written = write_options(prefix, {**defaults, **(options or {})})
+    snes = PETSc.SNES().create(problem.comm)
+    snes.setOptionsPrefix(prefix)
+
+    def residual(_snes, x, b):
+        for c in problem.contacts:
+            c.update(x, search=False)
+        problem.residual(x, b)
+
+    def jacobian(_snes, x, A, P):
+        problem.jacobian(x, A)
+
+    A = problem.matrix()
+    snes.setFunction(residual, problem.b.duplicate())
+    snes.setJacobian(jacobian, A, A)
+    snes.setFromOptions()
+    try:
+        snes.solve(None, problem.x)
+    finally:
+        forget_options(written)
+    reason = snes.getConvergedReason()
+    snes.destroy()
+    problem.scatter()
+    return reason

@@ -1,0 +1,338 @@
+"""The discrete problem of a scene: bodies as UFL residuals, obstacles, contact pairs.
+
+Built once from a :class:`~dolfinx_friction.scene.model.Scene` on the composable core: each
+body's small-strain linear elastic residual is a UFL form of its own dolfinx space, each
+``[[contact]]`` a :class:`~dolfinx_friction.fem.node_to_surface.NodeToSurface` (matched by name), and
+every ``[[rigid]]`` obstacle's translation an unknown of the
+:class:`~dolfinx_friction.fem.block_problem.BlockProblem` that joins them.  The solver drives it.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx_friction import _compat as compat
+
+from dolfinx_friction.io import gmsh as gmsh_io
+from dolfinx_friction.fem.numbering import BodyField, make_fields
+from dolfinx_friction.scene.model import Body, ContactPair, Scene
+from dolfinx_friction.fem.node_to_surface import ContactSetupError, NodeToSurface, Surface, make_law
+from dolfinx_friction.fem.block_problem import BlockProblem
+
+
+class ModelError(ValueError):
+    """The scene does not fit its mesh (a missing group, a group of the wrong kind...)."""
+
+
+def _lame(body: Body, gdim: int) -> tuple[float, float]:
+    mu = body.E / (2.0 * (1.0 + body.nu))
+    lam = body.E * body.nu / ((1.0 + body.nu) * (1.0 - 2.0 * body.nu))
+    if gdim == 2 and body.plane == "stress":
+        lam = 2.0 * lam * mu / (lam + 2.0 * mu)
+    return lam, mu
+
+
+def _thickness(field: BodyField) -> float:
+    return field.body.thickness if field.gdim == 2 else 1.0
+
+
+def elastic_forms(field: BodyField) -> tuple[ufl.Form, ufl.Form]:
+    """Residual ``(sigma(u), eps(v)) t dx`` of small-strain linear elasticity and its
+    Jacobian (``t``: the thickness of a 2D body)."""
+    lam, mu = _lame(field.body, field.gdim)
+    v, du = ufl.TestFunction(field.V), ufl.TrialFunction(field.V)
+
+    def eps(w):
+        return ufl.sym(ufl.grad(w))
+
+    def sigma(w):
+        return lam * ufl.tr(eps(w)) * ufl.Identity(field.gdim) + 2.0 * mu * eps(w)
+    t = _thickness(field)
+    return (t * ufl.inner(sigma(field.u), eps(v)) * ufl.dx,
+            t * ufl.inner(sigma(du), eps(v)) * ufl.dx)
+
+
+def deformation_gradient(u, gdim: int):
+    """``(F, F3)``: the deformation gradient as a UFL variable, and as 3 x 3 (plane strain
+    in 2D: ``F33 = 1``)."""
+    F = ufl.variable(ufl.Identity(gdim) + ufl.grad(u))
+    if gdim == 3:
+        return F, F
+    return F, ufl.as_matrix([[F[0, 0], F[0, 1], 0], [F[1, 0], F[1, 1], 0], [0, 0, 1]])
+
+
+def strain_energy(body: Body, F3):
+    """Strain energy density per reference volume of a finite-strain model.
+
+    Saint Venant-Kirchhoff: ``W = lam/2 tr(E)^2 + mu tr(E^2)``, ``E = (F^T F - I)/2``.
+    Neo-Hooke (CalculiX's NEO HOOKE): ``W = C10 (I1bar - 3) + (J - 1)^2 / D1`` with
+    ``I1bar = J^(-2/3) tr(F^T F)``, ``C10 = mu/2``, ``D1 = 2/kappa``, ``kappa = E/(3(1-2nu))``.
+    """
+    mu = body.E / (2.0 * (1.0 + body.nu))
+    C = F3.T * F3
+    if body.model == "saint-venant-kirchhoff":
+        lam = body.E * body.nu / ((1.0 + body.nu) * (1.0 - 2.0 * body.nu))
+        E = 0.5 * (C - ufl.Identity(3))
+        return 0.5 * lam * ufl.tr(E) ** 2 + mu * ufl.inner(E, E)
+    if body.model == "neo-hookean":
+        kappa = body.E / (3.0 * (1.0 - 2.0 * body.nu))
+        J = ufl.det(F3)
+        return 0.5 * mu * (J ** (-2.0 / 3.0) * ufl.tr(C) - 3.0) + 0.5 * kappa * (J - 1.0) ** 2
+    raise ValueError(f"body {body.name!r}: unknown model {body.model!r}")
+
+
+def cauchy_stress(field: BodyField):
+    """The body's Cauchy stress as a 3 x 3 UFL tensor (plane strain in 2D: with the
+    out-of-plane normal stress)."""
+    body, d = field.body, field.gdim
+    if not body.finite_strain:
+        lam, mu = _lame(body, d)
+        eps = ufl.sym(ufl.grad(field.u))
+        sigma = lam * ufl.tr(eps) * ufl.Identity(d) + 2.0 * mu * eps
+        if d == 3:
+            return sigma
+        s33 = lam * ufl.tr(eps) if body.plane == "strain" else 0.0
+        return ufl.as_matrix([[sigma[0, 0], sigma[0, 1], 0], [sigma[1, 0], sigma[1, 1], 0],
+                              [0, 0, s33]])
+    F, F3 = deformation_gradient(field.u, d)
+    F3v = ufl.variable(F3)
+    P = ufl.diff(strain_energy(body, F3v), F3v)
+    return P * F3.T / ufl.det(F3)
+
+
+def von_mises(sigma):
+    """``sqrt(3/2 s:s)`` of a 3 x 3 stress tensor, ``s`` its deviator."""
+    s = sigma - ufl.tr(sigma) / 3.0 * ufl.Identity(3)
+    return ufl.sqrt(1.5 * ufl.inner(s, s))
+
+
+def body_forms(field: BodyField) -> tuple[ufl.Form, Optional[ufl.Form]]:
+    """The body's residual form and Jacobian (None: ``ufl.derivative``): small-strain
+    elasticity, or the first Piola-Kirchhoff stress ``P = dW/dF`` of its finite-strain
+    model against the gradient of the test function (reference configuration)."""
+    if not field.body.finite_strain:
+        return elastic_forms(field)
+    F, F3 = deformation_gradient(field.u, field.gdim)
+    P = ufl.diff(strain_energy(field.body, F3), F)
+    v = ufl.TestFunction(field.V)
+    # UFL would estimate a high degree for the rational integrand: Gauss rules of degree
+    # 2k (2 x 2 points on bilinear quadrilaterals, as CalculiX's CPE4 / C3D8)
+    dx = ufl.dx(metadata={"quadrature_degree": 2 * compat.space_degree(field.V)})
+    return _thickness(field) * ufl.inner(P, ufl.grad(v)) * dx, None
+
+
+class ContactProblem:
+    """A scene's bodies, obstacles and contact pairs as one :class:`BlockProblem`.
+
+    ``pairs`` maps each contact's name (``"slave->master"``) to its
+    :class:`NodeToSurface`; ``system.x`` is the displacement (the only copy: the bodies'
+    Functions are refreshed from it).
+    """
+
+    def __init__(self, scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD,
+                 meshes: Optional[gmsh_io.MeshSet] = None):
+        self.scene, self.comm = scene, comm
+        names = [b.name for b in scene.bodies]
+        self.meshes = meshes or gmsh_io.load_mesh(scene.mesh, names, comm)
+        self.gdim = self.meshes.gdim
+        self._check_groups()
+        self.fields, self.layout = make_fields(
+            comm, [(b, self.meshes.bodies[b.name]) for b in scene.bodies], len(scene.rigids))
+        self.pairs = {f"{c.slave}->{c.master}": self._pair(c, f"contact.{i}")
+                      for i, c in enumerate(scene.contacts)}
+        self.follower_pressures = self._follower_pressures()
+        forms = [self._forms(f) for f in self.fields]
+        self.system = BlockProblem([F for F, _ in forms], [f.u for f in self.fields],
+                                   contacts=list(self.pairs.values()),
+                                   jacobians=[J for _, J in forms],
+                                   obstacles=len(scene.rigids))
+        self.system.guards += [self._inversion_guard(f) for f in self.fields
+                               if f.body.finite_strain]
+
+    def _follower_pressures(self) -> dict[tuple[str, str], object]:
+        """A Constant per (finite-strain body, group) that some step loads with a pressure:
+        such a pressure follows the deformed face (its load stiffness is in the Jacobian)."""
+        out = {}
+        for step in self.scene.steps:
+            for load in step.loads:
+                if load.pressure is None:
+                    continue
+                for f in self.group_fields(load.on):
+                    if f.body.finite_strain and (f.body.name, load.on) not in out:
+                        out[(f.body.name, load.on)] = compat.scalar_constant(f.V.mesh, 0.0)
+        return out
+
+    def _forms(self, field: BodyField) -> tuple[ufl.Form, Optional[ufl.Form]]:
+        F, J = body_forms(field)
+        for (body, group), p in self.follower_pressures.items():
+            if body != field.body.name:
+                continue
+            tags, _ = field.mesh.meshtags(self.gdim - 1, [group])
+            ds = ufl.Measure("ds", domain=field.V.mesh, subdomain_data=tags)(1)
+            G = ufl.Identity(self.gdim) + ufl.grad(field.u)
+            N, v = ufl.FacetNormal(field.V.mesh), ufl.TestFunction(field.V)
+            # Nanson: n da = J F^-T N dA; the pressure pushes into the body
+            F += _thickness(field) * p * ufl.det(G) * ufl.inner(ufl.inv(G).T * N, v) * ds
+        return F, J
+
+    def _inversion_guard(self, field: BodyField):
+        """A check that no quadrature point of a finite-strain body has ``det F <= 0``."""
+        _, F3 = deformation_gradient(field.u, self.gdim)
+        degree = 2 * (field.body.degree or compat.geometry_degree(field.V.mesh))
+        expression = compat.quadrature_expression(ufl.det(F3), field.V.mesh, degree)
+
+        def guard() -> str:
+            J = compat.evaluate_on_owned_cells(expression, field.V.mesh)
+            inverted = self.comm.allreduce(int((J <= 0.0).any() or not np.isfinite(J).all()))
+            return f"an element of body {field.body.name!r} inverts (det F <= 0)" \
+                if inverted else ""
+        return guard
+
+    @property
+    def u(self) -> PETSc.Vec:
+        """The displacement of every body and obstacle, in system numbering."""
+        return self.system.x
+
+    # ------------------------------------------------------------ lookups
+    def _check_groups(self) -> None:
+        s, dims = self.scene, self.meshes.group_dims
+        fdim = self.gdim - 1
+        for i, r in enumerate(s.rigids):
+            if r.name in dims:
+                raise ModelError(f"rigid.{i}.name: {r.name!r} is also a physical group of the "
+                                 "mesh: ambiguous as a contact master (rename the obstacle)")
+        for k, c in enumerate(s.contacts):
+            if c.slave not in dims:
+                raise ModelError(f"contact.{k}.slave: no physical group {c.slave!r} in the mesh")
+            if dims[c.slave] != fdim:
+                raise ModelError(f"contact.{k}.slave: group {c.slave!r} has dimension "
+                                 f"{dims[c.slave]}, contact surfaces need {fdim}")
+            if s.rigid(c.master) is None:
+                if c.master not in dims:
+                    raise ModelError(f"contact.{k}.master: {c.master!r} is neither a physical "
+                                     f"group of the mesh nor a [[rigid]] obstacle")
+                if dims[c.master] != fdim:
+                    raise ModelError(f"contact.{k}.master: group {c.master!r} has dimension "
+                                     f"{dims[c.master]}, contact surfaces need {fdim}")
+            for role in ("slave", "master"):
+                g = getattr(c, role)
+                if g not in dims:
+                    continue
+                owners = self.meshes.group_bodies.get(g, ())
+                if len(owners) != 1:
+                    touched = self.meshes.group_touches.get(g, ())
+                    raise ModelError(
+                        f"contact.{k}.{role}: group {g!r} " + (
+                            f"lies on {len(owners)} bodies at once ({', '.join(owners)}: "
+                            "their meshes share its nodes)" if owners else
+                            f"spans the bodies {', '.join(touched)}" if len(touched) > 1 else
+                            "lies on none of the bodies") +
+                        "; a contact surface must lie on exactly one body")
+                inside = self.meshes.bodies[owners[0]].interior_facets(g)
+                if inside:
+                    raise ModelError(f"contact.{k}.{role}: group {g!r} has {inside} facet(s) "
+                                     f"inside body {owners[0]!r}; a contact surface must be on "
+                                     "the body's boundary")
+        for i, step in enumerate(s.steps):
+            for j, bc in enumerate(step.bcs):
+                self._check_node_group(bc.on, f"step.{i}.bc.{j}.on")
+            for j, load in enumerate(step.loads):
+                self._check_node_group(load.on, f"step.{i}.load.{j}.on")
+                if dims[load.on] != fdim:
+                    raise ModelError(f"step.{i}.load.{j}.on: group {load.on!r} is not a facet "
+                                     f"group")
+        for g in s.output.reactions or ():
+            self._check_node_group(g, "output.reactions")
+        wrong = [(key, v) for key, v in _vectors(s) if len(v) != self.gdim]
+        if wrong:
+            key, v = wrong[0]
+            raise ModelError(f"{key} has {len(v)} components, but the mesh {s.mesh} is "
+                             f"{self.gdim}D (every vector has the mesh dimension)")
+        for b in s.bodies:
+            if self.gdim == 3 and (b.plane != "strain" or b.thickness != 1.0):
+                raise ModelError(f"body {b.name!r}: plane/thickness apply to 2D meshes only")
+
+    def _check_node_group(self, group: str, key: str) -> None:
+        if group not in self.meshes.group_dims:
+            raise ModelError(f"{key}: no physical group {group!r} in the mesh")
+        if not self.meshes.group_bodies.get(group):
+            raise ModelError(f"{key}: group {group!r} lies on no deformable body")
+
+    def body_field(self, name: str) -> BodyField:
+        return next(f for f in self.fields if f.body.name == name)
+
+    def group_fields(self, group: str) -> list[BodyField]:
+        return [self.body_field(b) for b in self.meshes.group_bodies.get(group, ())]
+
+    def rigid_node(self, name: str) -> int:
+        return self.layout.rigid_node([r.name for r in self.scene.rigids].index(name))
+
+    def owned_group_dofs(self, group: str) -> np.ndarray:
+        """Local (rank-owned) system dof rows of every node of a group, (n_nodes, gdim)."""
+        d = self.gdim
+        rows = [(self.layout.block_offsets[f.block] + f.owned_group_nodes(group))[:, None] * d
+                + np.arange(d) for f in self.group_fields(group)]
+        return np.concatenate(rows) if rows else np.zeros((0, d), dtype=np.int64)
+
+    def rigid_dofs(self, name: str) -> np.ndarray:
+        """Local system dof rows of a rigid obstacle's translation (rank 0; empty elsewhere)."""
+        if self.comm.rank != 0:
+            return np.zeros((0, self.gdim), dtype=np.int64)
+        node = self.rigid_node(name) - self.layout.start
+        return (node * self.gdim + np.arange(self.gdim))[None]
+
+    def rigid_body_modes(self) -> PETSc.NullSpace:
+        """Translations and rotations of every body, orthonormal: the near null space
+        that algebraic multigrid needs (see :meth:`BlockProblem.rigid_body_modes`)."""
+        return self.system.rigid_body_modes()
+
+    # ------------------------------------------------------------- contact
+    def _pair(self, pair: ContactPair, key: str) -> NodeToSurface:
+        slave_field = self.group_fields(pair.slave)[0]
+        body = slave_field.body
+        pair = pair.resolved(body.E)  # K and stick_slope: by NodeToSurface, with its spacing
+        rigid = self.scene.rigid(pair.master)
+        fdim = self.gdim - 1
+        slave_tags, _ = slave_field.mesh.meshtags(fdim, [pair.slave])
+        if rigid is not None:
+            master, index = rigid, [r.name for r in self.scene.rigids].index(rigid.name)
+        else:
+            master_field = self.group_fields(pair.master)[0]
+            master = Surface(master_field.V, master_field.mesh.meshtags(fdim, [pair.master])[0], 1)
+            index = None
+        try:
+            return NodeToSurface(
+                Surface(slave_field.V, slave_tags, 1), master, spaces=[f.V for f in self.fields],
+                law=None if pair.law == "linear" else make_law(pair), K=pair.K,
+                sigma_inf=pair.sigma_inf, c0=pair.c0, E=body.E, mu=pair.mu,
+                stick_slope=pair.stick_slope, tangent=pair.tangent,
+                thickness=body.thickness if self.gdim == 2 else 1.0,
+                pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
+                obstacle_index=index, n_obstacles=len(self.scene.rigids),
+                body_names=(body.name, pair.master))
+        except ContactSetupError as error:  # e.g. a default K that overflows
+            raise ModelError(f"{key}: {error}") from None
+
+    def pair_of(self, contact: ContactPair) -> NodeToSurface:
+        """The :class:`NodeToSurface` of a scene contact."""
+        return self.pairs[f"{contact.slave}->{contact.master}"]
+
+
+def _vectors(scene: Scene) -> list[tuple[str, tuple]]:
+    """Every vector of the scene with its key path (arrays indexed from 0)."""
+    out = []
+    for i, step in enumerate(scene.steps):
+        out += [(f"step.{i}.bc.{j}.u", bc.u) for j, bc in enumerate(step.bcs)]
+        out += [(f"step.{i}.load.{j}.traction", ld.traction) for j, ld in enumerate(step.loads)
+                if ld.traction is not None]
+        for j, r in enumerate(step.rigid):
+            name = "displacement" if r.displacement is not None else "force"
+            out.append((f"step.{i}.rigid.{j}.{name}", getattr(r, name)))
+    for i, r in enumerate(scene.rigids):
+        out += [(f"rigid.{i}.{name}", getattr(r, name))
+                for name in ("point", "normal", "center", "axis") if getattr(r, name) is not None]
+    return out

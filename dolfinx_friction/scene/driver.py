@@ -1,0 +1,342 @@
+"""A scene's load steps on the composable core: what each step prescribes, and reports.
+
+Each step ramps prescribed displacements, loads and rigid-obstacle motions linearly from
+their values at the start of the step to the step's totals (:class:`StepLoading`);
+:func:`~dolfinx_friction.nls.stepping.solve_steps` takes the increments, with cutbacks, and
+:class:`~dolfinx_friction.nls.newton.Newton` each increment.  Every converged increment is
+reported as an :class:`Increment` (reactions, obstacle motions, contact counts).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+import numpy as np
+
+from dolfinx_friction.nls import stepping
+from dolfinx_friction.errors import interruption
+from dolfinx_friction.nls.newton import Newton
+from dolfinx_friction.scene.build import ContactProblem, ModelError
+from dolfinx_friction.nls.stepping import IncrementRecord
+from dolfinx_friction.fem.block_problem import Timers
+
+
+class ConvergenceError(RuntimeError):
+    """An increment failed after all cutbacks."""
+
+
+#: Largest Young's modulus, penalty K or stick slope a scene may give: forces of order
+#: E L^2 are squared in residual norms (sqrt of the largest double: 1.3e154); 1e150 leaves
+#: room for the areas, displacements and dof counts, and is far beyond any material in any
+#: unit system (diamond: 1.2e12 Pa).
+MAX_MODULUS = 1e150
+
+
+@dataclass
+class Increment:
+    """A converged increment, as reported to observers."""
+
+    step: int
+    step_name: str
+    increment: int
+    t: float
+    iterations: int
+    residual: float
+    residuals: list[float]
+    status_changes: list[int]  # per iteration: slave nodes whose contact status changed
+    face_changes: list[int]  # per iteration: other slave nodes whose master face changed
+    backtracks: list[int]  # per iteration: line-search halvings
+    active: int
+    slipping: int
+    wall: float
+    reactions: dict[str, np.ndarray]
+    rigid_u: dict[str, np.ndarray]
+    rigid_f: dict[str, np.ndarray]
+    penetration: dict[str, float]  # largest overclosure / slave spacing, per contact pair
+    detached: dict[str, int]  # nodes in contact before that slid off the master surface
+
+
+@dataclass
+class RunSummary:
+    increments: int = 0
+    cutbacks: int = 0
+    newton_iterations: int = 0
+    converged: bool = False
+    wall: float = 0.0
+    timers: Timers = field(default_factory=Timers)
+    failure: str = ""
+
+
+class StepLoading:
+    """What one step prescribes: constrained rows with values and external forces, both
+    linear in the step's pseudo-time ``tau`` from their values at the step's start."""
+
+    def __init__(self, rows: np.ndarray, u_start, u_end, f_start, f_end, first: bool,
+                 pressures: list):
+        self.rows, self.u_start, self.u_end, self.first = rows, u_start, u_end, first
+        self.f_start, self.f_end = f_start, f_end
+        self.pressures = pressures  # (Constant, start, end) of follower pressures
+
+    def at(self, tau: float) -> tuple[np.ndarray, np.ndarray]:
+        """Prescribed values and external forces at ``tau``; sets the follower pressures."""
+        for constant, start, end in self.pressures:
+            constant.value = start + tau * (end - start)
+        return (self.u_start + tau * (self.u_end - self.u_start),
+                self.f_start + tau * (self.f_end - self.f_start))
+
+
+class Solver:
+    """Drives a :class:`ContactProblem` through the steps of its scene."""
+
+    def __init__(self, problem: ContactProblem, options_prefix: str = "dolfinx_friction_",
+                 petsc_options: Optional[dict] = None,
+                 reuse_factorisation: Optional[bool] = None):
+        self.problem = problem
+        self.comm, self.gdim = problem.comm, problem.gdim
+        self.system = problem.system
+        self.timers = self.system.timers
+        self.newton = Newton(prefix=options_prefix, petsc_options=petsc_options,
+                             reuse_factorisation=reuse_factorisation)
+        self.summary = RunSummary(timers=self.timers)
+        self._bc_state: dict[str, tuple] = {}
+        self._load_state: dict[str, tuple] = {}
+        self._rigid_state: dict[str, tuple] = {}
+        self._unit_loads: dict[str, list] = {}
+        self._reaction_rows = {g: problem.owned_group_dofs(g) for g in self.reaction_groups()}
+
+    @property
+    def linear(self):
+        """The linear solver of the Newton iterations (its counts: factorisations...)."""
+        return self.newton.linear
+
+    # ------------------------------------------------------------ set-up
+    def reaction_groups(self) -> list[str]:
+        s = self.problem.scene
+        if s.output.reactions is not None:
+            return list(s.output.reactions)
+        seen: dict[str, None] = {}
+        for step in s.steps:
+            seen.update(dict.fromkeys(bc.on for bc in step.bcs))
+        return list(seen)
+
+    def _loads(self, group: str) -> list:
+        if group not in self._unit_loads:
+            from dolfinx_friction.fem import loads as bulk
+            self._unit_loads[group] = [
+                (self.problem.layout.owned_slice(f.block, self.gdim), bulk.unit_loads(f, group),
+                 f) for f in self.problem.group_fields(group)]
+        return self._unit_loads[group]
+
+    def validate_steps(self) -> None:
+        """Check the prescribed values of every step before solving anything (collective):
+        moduli whose forces would overflow, bodies that nothing holds, conflicting bcs."""
+        self._check_magnitudes()
+        self._check_held()
+        saved = (dict(self._bc_state), dict(self._load_state), dict(self._rigid_state))
+        try:
+            for index in range(len(self.problem.scene.steps)):
+                self._step_loading(index)
+        finally:
+            self._bc_state, self._load_state, self._rigid_state = saved
+
+    def _check_magnitudes(self) -> None:
+        """Refuse moduli and penalties that are finite but too large to solve with: forces
+        of order E (or K) times an area are squared in the residual norms, which overflow
+        beyond about 1e154 (E = 1e300 used to end as "diverged", residual inf)."""
+        scene, limit = self.problem.scene, MAX_MODULUS
+        for i, body in enumerate(scene.bodies):
+            if body.E > limit:
+                raise ModelError(f"body.{i}.E = {body.E:g} is too large to solve with (forces "
+                                 f"of order E times an area are squared in the residual norm, "
+                                 f"which overflows): at most {limit:g}; use other units")
+        for i, pair in enumerate(scene.contacts):
+            for key in ("K", "stick_slope"):
+                value = getattr(pair, key)
+                if isinstance(value, (int, float)) and value > limit:
+                    raise ModelError(f"contact.{i}.{key} = {value:g} is too large to solve with "
+                                     f"(the contact forces are squared in the residual norm, "
+                                     f"which overflows): at most {limit:g}; use other units")
+
+    def _check_held(self) -> None:
+        """Refuse, before solving, a body that nothing holds against rigid motion in some
+        step: no displacement constraint on any of its groups, and no contact pair joining
+        it (through other bodies) to a constrained body or to an obstacle whose translation
+        is prescribed.  The scene and the mesh's group table are the same on every rank."""
+        p, scene = self.problem, self.problem.scene
+        rigids = {r.name for r in scene.rigids}
+        parent = {name: name for name in [b.name for b in scene.bodies] + sorted(rigids)}
+
+        def root(name: str) -> str:
+            while parent[name] != name:
+                name = parent[name]
+            return name
+
+        def owners(group: str) -> list[str]:
+            return [group] if group in rigids else [f.body.name for f in p.group_fields(group)]
+
+        for pair in scene.contacts:  # a contact pair could hold either side by the other
+            ends = owners(pair.slave) + owners(pair.master)
+            for other in ends[1:]:
+                parent[root(other)] = root(ends[0])
+        bcs: dict[str, tuple] = {}
+        forced: dict[str, bool] = {}  # rigid obstacle -> force-controlled (else prescribed)
+        for k, step in enumerate(scene.steps):
+            bcs.update({bc.on: bc.u for bc in step.bcs})
+            forced.update({r.name: r.force is not None for r in step.rigid})
+            held = {root(name) for group, u in bcs.items() if any(c is not None for c in u)
+                    for name in owners(group)}
+            held |= {root(r) for r in rigids if not forced.get(r, False)}
+            for i, body in enumerate(scene.bodies):
+                if root(body.name) not in held:
+                    raise ModelError(
+                        f"body.{i} ({body.name!r}) is not held against rigid motion in step "
+                        f"{k}: no displacement constraint on any of its groups, and no contact "
+                        f"pair joins it to a constrained body or a prescribed obstacle")
+
+    def _report_conflict(self, index: int, conflict: np.ndarray) -> None:
+        """Name the bc groups that prescribe different values to the same components."""
+        found = set()
+        for group, comps in self._bc_state.items():
+            rows = self.problem.owned_group_dofs(group)
+            for c, value in enumerate(comps):
+                if value is not None and conflict[rows[:, c]].any():
+                    found.add((group, "xyz"[c]))
+        found = sorted(set().union(*self.comm.allgather(found)))
+        groups = sorted({g for g, _ in found})
+        axes = "".join(sorted({a for _, a in found}))
+        raise ModelError(f"step.{index}: bc groups {', '.join(map(repr, groups))} overlap and "
+                         f"prescribe different values of component(s) {axes} to shared nodes")
+
+    def _step_loading(self, index: int) -> StepLoading:
+        p, d = self.problem, self.gdim
+        step = p.scene.steps[index]
+        self._bc_state.update({bc.on: bc.u for bc in step.bcs})
+        self._load_state.update({ld.on: (ld.traction, ld.pressure) for ld in step.loads})
+        self._rigid_state.update({r.name: (r.displacement, r.force) for r in step.rigid})
+        # prescribed displacements: sums and counts per dof detect conflicting values
+        n = p.layout.n_owned * d
+        total, total_sq, count = np.zeros(n), np.zeros(n), np.zeros(n)
+        for group, comps in self._bc_state.items():
+            rows = p.owned_group_dofs(group)
+            for c, value in enumerate(comps):
+                if value is not None:
+                    np.add.at(total, rows[:, c], value)
+                    np.add.at(total_sq, rows[:, c], value * value)
+                    np.add.at(count, rows[:, c], 1.0)
+        f_end = np.zeros(n)
+        for rigid in p.scene.rigids:
+            disp, force = self._rigid_state.get(rigid.name, ((0.0,) * d, None))
+            rows = p.rigid_dofs(rigid.name).ravel()
+            if not len(rows):
+                continue
+            if force is not None:
+                f_end[rows] += force
+            else:
+                total[rows] += disp
+                count[rows] += 1.0
+        mean = np.divide(total, count, out=np.zeros(n), where=count > 0)
+        spread = np.divide(total_sq, count, out=np.zeros(n), where=count > 0) - mean ** 2
+        conflict = spread > 1e-24 * np.maximum(1.0, mean ** 2)
+        if self.comm.allreduce(int(conflict.any())):
+            self._report_conflict(index, conflict)
+        pressures = []
+        for group, (traction, pressure) in self._load_state.items():
+            for owned, unit, f in self._loads(group):
+                vec = np.zeros(unit.shape[1])
+                if traction is not None:  # a dead load: per reference area
+                    vec += np.asarray(traction) @ unit[:d]
+                follower = p.follower_pressures.get((f.body.name, group))
+                if pressure is not None and follower is not None:
+                    pressures.append((follower, float(follower.value), pressure))
+                elif pressure is not None:
+                    vec += pressure * unit[d]
+                f_end[owned] += vec
+        rows = np.flatnonzero(count > 0)
+        u_start = self.system.x.getArray(readonly=True)[rows].copy()
+        return StepLoading(rows, u_start, mean[rows], self.system.f_ext.copy(), f_end,
+                           index == 0, pressures)
+
+    # -------------------------------------------------------------- run
+    def run(self, on_increment: Optional[Callable[[Increment], None]] = None) -> RunSummary:
+        # SIGINT/SIGTERM (command line only): every residual evaluation is a collective
+        # checkpoint where all ranks stop together (errors.Interruption); first in the
+        # guards, so that it is reached whatever the other guards find
+        def checkpoint() -> None:
+            interruption.checkpoint(self.comm)
+        self.system.guards.insert(0, checkpoint)
+        interruption.solving = True
+        try:
+            return self._run(on_increment)
+        finally:
+            interruption.solving = False
+            self.system.guards.remove(checkpoint)
+
+    def _run(self, on_increment: Optional[Callable[[Increment], None]]) -> RunSummary:
+        summary = self.summary
+        start = time.perf_counter()
+        for index, step in enumerate(self.problem.scene.steps):
+            loading = self._step_loading(index)
+            newton = self.newton
+            newton.rtol, newton.atol = step.newton_rtol, step.newton_atol
+            newton.max_iterations, newton.line_search = step.max_iterations, step.line_search
+            newton.stall = step.stall_iterations
+            newton.convergence, newton.reaction_tol = step.convergence, step.reaction_tol
+            done = [0]  # converged increments of this step
+
+            def load(tau: float, loading=loading, index=index, done=done) -> None:
+                interruption.where = (index, done[0] + 1)  # named if a signal stops the run
+                values, self.system.f_ext = loading.at(tau)
+                self.system.prescribe(loading.rows, values)
+                for pair in self.problem.pairs.values():
+                    pair.ramp = (1.0 - tau) if loading.first else 0.0
+
+            def converged(record: IncrementRecord, index=index, name=step.name,
+                          done=done) -> None:
+                summary.increments += 1
+                summary.cutbacks += record.cutbacks
+                summary.newton_iterations += record.work
+                done[0] = record.number
+                report = self._report(index, name, record, time.perf_counter() - start)
+                if on_increment is not None:
+                    on_increment(report)
+            try:
+                stepping.solve_steps(self.system, load, step.increments, newton,
+                                     step.max_cutbacks, converged)
+            except stepping.ConvergenceError as exc:
+                summary.cutbacks += exc.cutbacks
+                summary.newton_iterations += exc.iterations
+                reason = (f"step {index} ({step.name!r}), increment {exc.increment} at "
+                          f"t = {index + exc.t:.6g}: Newton did not converge after "
+                          f"{step.max_cutbacks} cutbacks (last residual {exc.residual:.3e}"
+                          + (f": {exc.reason})" if exc.reason else ")"))
+                summary.failure = reason
+                summary.wall = time.perf_counter() - start
+                raise ConvergenceError(reason) from None
+        summary.converged = True
+        summary.wall = time.perf_counter() - start
+        return summary
+
+    # ----------------------------------------------------------- reports
+    def _report(self, index: int, name: str, record: IncrementRecord, wall: float) -> Increment:
+        p, comm, system = self.problem, self.comm, self.system
+        internal = system.internal
+        # internal minus external force at a node: the force its constraint exerts on the body
+        residual = internal - system.f_ext
+        reactions = {g: comm.allreduce(residual[rows].sum(axis=0) if len(rows) else
+                                       np.zeros(self.gdim))
+                     for g, rows in self._reaction_rows.items()}
+        u = system.x.getArray(readonly=True)
+        rigid_u, rigid_f = {}, {}
+        for rigid in p.scene.rigids:
+            rows = p.rigid_dofs(rigid.name).ravel()
+            rigid_u[rigid.name] = comm.bcast(u[rows].copy() if comm.rank == 0 else None)
+            rigid_f[rigid.name] = comm.bcast(internal[rows].copy() if comm.rank == 0 else None)
+        counts = [pair.counts() for pair in p.pairs.values()]
+        active, slipping = (int(c) for c in np.sum(counts, axis=0)) if counts else (0, 0)
+        trace = record.trace
+        return Increment(index, name, record.number, index + record.t, trace.iterations,
+                         trace.residuals[-1], trace.residuals, trace.status_changes,
+                         trace.face_changes, trace.backtracks, active, slipping, wall,
+                         reactions, rigid_u, rigid_f, record.penetration, record.detached)
+

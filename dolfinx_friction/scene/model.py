@@ -1,0 +1,328 @@
+"""The analysis model shared by the scene reader and the Python API.
+
+Plain dataclasses, no dolfinx.  Quantities whose default depends on the mesh
+or on the slave body's material (``K``, ``sigma_inf``, ``stick_slope``) are
+``None`` here (or :data:`CALCULIX` for CalculiX's rule) and resolved by
+:meth:`ContactPair.resolved` once the slave body and its node spacing are known.
+
+Every dataclass checks and converts its fields when built, by the rules of its scene-file
+table (:data:`RULES`, with the checks of :mod:`dolfinx_friction.scene.validation`): a script and a
+scene file are held to the same rules and get the same one-line :class:`SceneError`
+messages (see :mod:`dolfinx_friction.scene.validation` for how the fields are named).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Optional, Sequence, Union
+
+from dolfinx_friction.scene import validation as v
+from dolfinx_friction.scene.validation import CALCULIX, Key, Rules, validate
+
+Vector = tuple[float, ...]
+#: A prescribed displacement component, a number or ``None`` for "free".
+Component = Optional[float]
+
+LAWS = ("linear", "exponential", "tabular", "hard")
+#: Constitutive models of a body, small-strain linear elasticity or finite strain (the
+#: scene is then solved geometrically nonlinearly): Saint Venant-Kirchhoff (Green-Lagrange
+#: strain, second Piola-Kirchhoff stress from E and nu: CalculiX's NLGEOM with ``*ELASTIC``) and
+#: compressible Neo-Hooke as CalculiX's ``*HYPERELASTIC, NEO HOOKE``.
+MODELS = ("linear", "saint-venant-kirchhoff", "neo-hookean")
+SHAPES = ("plane", "sphere", "cylinder")
+TANGENTS = ("consistent", "calculix")
+#: Newton's convergence tests (:mod:`dolfinx_friction.nls.newton`)
+CONVERGENCE = ("residual", "reactions")
+#: Newton gives up on an increment (it is cut back) after this many iterations without a
+#: new lowest residual (counted from the first step's): contact statuses cycling at the
+#: edge of a growing zone converge faster in halved increments (benchmarks/RESULTS.md;
+#: in converging solves off that kind the longest such run is 2)
+STALL_ITERATIONS = 6
+
+#: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
+#: h: its node spacing, see :meth:`ContactPair.resolved`), from the stability maps
+#: (benchmarks/stability/README.md).  K = 10 E/h is the stiffest decade at which every
+#: K x increment map converges for every increment size and method (with line search
+#: without a cutback); at 100 E/h frictional sliding fails or loses the contact, at
+#: 1 E/h the overclosure reaches 4 % of the spacing (Hertz, ironing: the penetration
+#: warning fires).  lambda = 1 E/h: the stiffest decade at which both stick slope x mu
+#: maps converge for every mu with and without line search, the full-slip ratio within
+#: 1 % of mu on the block (10 E/h: cutbacks and a lost contact on the ironing, 100 E/h
+#: fails; <= 0.01 E/h does not mobilise the friction).
+PENALTY_PER_SPACING = 10.0
+STICK_SLOPE_PER_SPACING = 1.0
+
+
+@dataclass(frozen=True)
+class Body:
+    """A deformable, isotropic elastic body: a physical group of cells."""
+
+    name: str
+    E: float
+    nu: float
+    degree: Optional[int] = None  # None: the geometry degree of the mesh
+    plane: str = "strain"  # 2D only: "strain" | "stress" (small strain only)
+    thickness: float = 1.0  # 2D only
+    model: str = "linear"  # one of MODELS
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[Body])
+
+    @property
+    def finite_strain(self) -> bool:
+        return self.model != "linear"
+
+
+@dataclass(frozen=True)
+class Rigid:
+    """An analytic rigid obstacle.
+
+    plane: ``point``, ``normal``; sphere (circle in 2D): ``center``, ``radius``;
+    cylinder (3D): ``point``, ``axis``, ``radius``.  The outward normal points
+    towards the deformable body (for a sphere/cylinder: away from the axis).
+    """
+
+    name: str
+    shape: str
+    point: Optional[Vector] = None
+    normal: Optional[Vector] = None
+    center: Optional[Vector] = None
+    axis: Optional[Vector] = None
+    radius: Optional[float] = None
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[Rigid])
+
+
+@dataclass(frozen=True)
+class ContactPair:
+    """Node-to-surface penalty contact between a slave facet group and a master.
+
+    ``master`` names a facet group or a :class:`Rigid` obstacle.
+    """
+
+    slave: str
+    master: str
+    law: str = "linear"
+    K: Union[float, str, None] = None  # None: the default; CALCULIX: 50 E
+    sigma_inf: Optional[float] = None
+    c0: Optional[float] = None
+    p0: Optional[float] = None
+    table: Optional[tuple[tuple[float, float], ...]] = None  # (pressure, overclosure)
+    mu: float = 0.0
+    stick_slope: Union[float, str, None] = None  # None: the default; CALCULIX: E/2
+    tangent: str = "consistent"
+    #: Newton iterations per increment in which slave nodes are re-paired;
+    #: later iterations keep the pairing frozen (CalculiX: 8).
+    pairing_iterations: int = 8
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[ContactPair])
+
+    def resolved(self, E_slave: float, spacing: Optional[float] = None) -> "ContactPair":
+        """Fill the defaults (contact-theory.md §8, scene-format.md version 2).
+
+        ``sigma_inf = E/70000``, ``c0 = 1e-3``; with the slave node spacing ``h``
+        (``spacing``, see :attr:`NodeToSurface.spacing`) also ``K = 10 E/h`` and
+        ``stick_slope = E/h`` (:data:`PENALTY_PER_SPACING`, :data:`STICK_SLOPE_PER_SPACING`);
+        :data:`CALCULIX` gives 50 E and E/2.  Without ``spacing`` a defaulted ``K`` and
+        ``stick_slope`` stay ``None`` (the pressure laws other than linear need no ``h``).
+        """
+        def rule(value, per_spacing: float, calculix: float):
+            if value == CALCULIX:
+                return calculix * E_slave
+            if value is None and spacing is not None:
+                return per_spacing * E_slave / spacing
+            return value
+
+        law = "linear" if self.law == "hard" else self.law
+        return replace(
+            self,
+            law=law,
+            K=rule(self.K, PENALTY_PER_SPACING, 50.0),
+            sigma_inf=self.sigma_inf if self.sigma_inf is not None else E_slave / 70000.0,
+            c0=self.c0 if self.c0 is not None else 1e-3,
+            stick_slope=rule(self.stick_slope, STICK_SLOPE_PER_SPACING, 0.5),
+        )
+
+
+@dataclass(frozen=True)
+class BC:
+    """Prescribed displacement (totals at the end of the step) on a group."""
+
+    on: str
+    u: tuple[Component, ...]
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[BC])
+
+
+@dataclass(frozen=True)
+class Load:
+    """A traction vector or a normal pressure (positive pushes into the body) on a facet group."""
+
+    on: str
+    traction: Optional[Vector] = None
+    pressure: Optional[float] = None
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[Load])
+
+
+@dataclass(frozen=True)
+class RigidMotion:
+    """Rigid obstacle driven by a total translation or a total force at the end of the step."""
+
+    name: str
+    displacement: Optional[Vector] = None
+    force: Optional[Vector] = None
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[RigidMotion])
+
+
+@dataclass(frozen=True)
+class Step:
+    """A load step: the totals prescribed at its end, reached in ``increments`` equal
+    increments (each halved at most ``max_cutbacks`` times), each solved by Newton."""
+
+    name: str
+    increments: int = 1
+    max_cutbacks: int = 6
+    newton_rtol: float = 1e-9
+    newton_atol: float = 1e-10
+    max_iterations: int = 30
+    stall_iterations: int = STALL_ITERATIONS  # 0: never give up before max_iterations
+    line_search: bool = True
+    convergence: str = "residual"  # or "reactions": also stop once they no longer change
+    reaction_tol: float = 1e-5
+    bcs: tuple[BC, ...] = ()
+    loads: tuple[Load, ...] = ()
+    rigid: tuple[RigidMotion, ...] = ()
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[Step])
+
+
+@dataclass(frozen=True)
+class Output:
+    """What a run writes, and where (``dir`` None: ``<scene>_results`` next to the scene)."""
+
+    dir: Optional[Path] = None
+    reactions: Optional[tuple[str, ...]] = None  # None: every group carrying a bc
+    fields: bool = True
+    contact_table: bool = True
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[Output])
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A whole analysis: mesh, bodies, obstacles, contact pairs, steps, output."""
+
+    mesh: Union[Path, object]  # a .msh path, or a live gmsh model (the ``gmsh`` module)
+    bodies: tuple[Body, ...]
+    steps: tuple[Step, ...]
+    contacts: tuple[ContactPair, ...] = ()
+    rigids: tuple[Rigid, ...] = ()
+    output: Output = field(default_factory=Output)
+    title: str = ""
+    source: Optional[Path] = None  # the scene file, if read from one
+    overrides: tuple[str, ...] = ()  # the ``--set KEY=VALUE`` applied to the file, as given
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[Scene])
+
+    def rigid(self, name: str) -> Optional[Rigid]:
+        return next((r for r in self.rigids if r.name == name), None)
+
+    def body(self, name: str) -> Optional[Body]:
+        return next((b for b in self.bodies if b.name == name), None)
+
+
+def as_vector(values: Sequence[float]) -> Vector:
+    return tuple(float(v) for v in values)
+
+
+#: The rules of each dataclass, by scene-file key in file order: checked when an object is
+#: built (from Python or by the scene reader, which takes the key names from here).
+RULES: dict[type, Rules] = {
+    Body: Rules("body", {
+        "name": Key(v.name, required=True),
+        "E": Key(v.modulus, required=True),
+        "nu": Key(v.number(gt=-1, lt=0.5), required=True),
+        "degree": Key(v.one_of(1, 2)),
+        "plane": Key(v.one_of("strain", "stress")),
+        "thickness": Key(v.number(gt=0)),
+        "model": Key(v.one_of(*MODELS)),
+    }),
+    Rigid: Rules("rigid", {
+        "name": Key(v.name, required=True),
+        "shape": Key(v.one_of(*SHAPES), required=True),
+        "point": Key(v.vector()),
+        "normal": Key(v.vector(nonzero=True)),
+        "center": Key(v.vector()),
+        "axis": Key(v.vector(nonzero=True)),
+        "radius": Key(v.number(gt=0)),
+    }, (v.check_shape,)),
+    ContactPair: Rules("contact", {
+        "slave": Key(v.name, required=True),
+        "master": Key(v.name, required=True),
+        "law": Key(v.one_of(*LAWS)),
+        "K": Key(v.penalty),
+        "sigma_inf": Key(v.number(gt=0)),
+        "c0": Key(v.number(gt=0)),
+        "p0": Key(v.number(ge=0)),
+        "table": Key(v.pressure_table),
+        "mu": Key(v.number(ge=0)),
+        "stick_slope": Key(v.penalty),
+        "tangent": Key(v.one_of(*TANGENTS)),
+        "pairing_iterations": Key(v.integer(1, 10_000)),
+    }, (v.check_law, v.check_not_self_contact)),
+    BC: Rules("step.bc", {
+        "on": Key(v.name, required=True),
+        "u": Key(v.displacement, required=True),
+    }),
+    Load: Rules("step.load", {
+        "on": Key(v.name, required=True),
+        "traction": Key(v.vector()),
+        "pressure": Key(v.ANY_NUMBER),
+    }, (v.exactly_one("traction", "pressure"),)),
+    RigidMotion: Rules("step.rigid", {
+        "name": Key(v.name, required=True),
+        "displacement": Key(v.vector()),
+        "force": Key(v.vector()),
+    }, (v.exactly_one("displacement", "force"),)),
+    Step: Rules("step", {
+        "name": Key(v.name),  # a scene file may leave it out: "step-<index>"
+        "increments": Key(v.integer(1, 1_000_000)),
+        "max_cutbacks": Key(v.integer(0, 50, "an increment halved more often is below the "
+                                             "resolution of the pseudo-time")),
+        "newton_rtol": Key(v.number(gt=0)),
+        "newton_atol": Key(v.number(gt=0)),
+        "max_iterations": Key(v.integer(1, 10_000)),
+        "stall_iterations": Key(v.integer(0, 10_000)),
+        "line_search": Key(v.boolean),
+        "convergence": Key(v.one_of(*CONVERGENCE)),
+        "reaction_tol": Key(v.number(gt=0, lt=1)),
+        "bc": Key(v.items(BC), field="bcs"),
+        "load": Key(v.items(Load), field="loads"),
+        "rigid": Key(v.items(RigidMotion)),
+    }, (v.check_step,)),
+    Output: Rules("output", {
+        "dir": Key(v.directory),
+        "reactions": Key(v.names),
+        "fields": Key(v.boolean),
+        "contact_table": Key(v.boolean),
+    }),
+    Scene: Rules("", {
+        "title": Key(v.string),
+        "mesh": Key(v.mesh_source, required=True),
+        "body": Key(v.items(Body, min_length=1), required=True, field="bodies"),
+        "rigid": Key(v.items(Rigid), field="rigids"),
+        "contact": Key(v.items(ContactPair), field="contacts"),
+        "step": Key(v.items(Step, min_length=1), required=True, field="steps"),
+        "output": Key(v.instance(Output)),
+    }, (v.check_scene,)),
+}

@@ -1,0 +1,136 @@
+"""Run a scene: the entry point shared by the command line and Python scripts."""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Optional, Sequence, Union
+
+from mpi4py import MPI
+
+from dolfinx_friction.errors import interruption
+from dolfinx_friction.scene.model import Scene
+from dolfinx_friction.io.writer import ResultWriter
+from dolfinx_friction.scene.build import ContactProblem
+from dolfinx_friction.scene.provenance import provenance
+from dolfinx_friction.scene.toml import SceneError, default_output_dir, load_scene
+from dolfinx_friction.scene.driver import ConvergenceError, Increment, RunSummary, Solver
+
+
+log = logging.getLogger(__name__)
+
+#: Overclosure, as a share of the slave node spacing, beyond which a run warns that the
+#: penalty is too soft for the mesh.
+PENETRATION_WARNING = 0.05
+
+
+@dataclass
+class RunResult:
+    """What a run produced: the solved problem, its increments and where the files are."""
+
+    problem: ContactProblem
+    summary: RunSummary
+    increments: list[Increment]
+    directory: Optional[Path]
+
+
+def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
+        overrides: Sequence[str] = (), write: bool = True,
+        comm: MPI.Comm = MPI.COMM_WORLD, petsc_options: Optional[dict] = None,
+        reuse_factorisation: Optional[bool] = None,
+        progress: Optional[Callable[[Increment], None]] = None) -> RunResult:
+    """Solve a scene (a :class:`Scene` or a scene file) and write its results.
+
+    ``overrides`` (``KEY=VALUE`` as ``--set`` takes them) apply to a scene file only (a
+    :class:`Scene` is changed with ``dataclasses.replace``); ``out`` overrides
+    ``[output] dir``; ``write=False`` keeps everything in memory;
+    ``progress`` is called with every converged increment once it is written (e.g. a
+    :class:`~dolfinx_friction.cli.progress.Progress`; on every rank where it is given).
+    Nothing is printed: warnings (a penalty too soft for the mesh, nodes that slid off
+    their master) and notices go to the ``dolfinx_friction`` logger, from rank 0;
+    ``petsc_options`` (without prefix) set the linear solver; ``reuse_factorisation``
+    keeps a factorisation as GMRES preconditioner across Newton iterations (default:
+    yes with the default MUMPS solver, no with ``petsc_options``; see ``linear``).
+    Raises :class:`ConvergenceError` (after writing ``summary.json``) when an
+    increment fails after all cutbacks.
+    """
+    start, cpu = time.perf_counter(), time.process_time()
+    if not isinstance(scene, Scene):
+        scene = load_scene(Path(scene), list(overrides))
+    elif overrides:
+        raise SceneError("overrides apply to a scene file; change a Scene object with "
+                         "dataclasses.replace", key="overrides")
+    problem = ContactProblem(scene, comm)
+    solver = Solver(problem, petsc_options=petsc_options,
+                    reuse_factorisation=reuse_factorisation)
+    solver.validate_steps()  # a bad later step is an input error, found before any output
+    directory = Path(out) if out is not None else (scene.output.dir or default_output_dir(scene))
+    writer = None
+    if write:
+        writer = ResultWriter(problem, solver.reaction_groups(), directory, scene.output.fields,
+                              scene.output.contact_table)
+        interruption.directory = directory  # named by the line of an interrupted run
+    solver.timers.add("setup", time.perf_counter() - start, time.process_time() - cpu)
+    increments: list[Increment] = []
+    warnings: dict[str, str] = {}
+
+    def warn(key: str, text: str) -> None:
+        if key not in warnings:
+            warnings[key] = text
+            if comm.rank == 0:
+                log.warning(text)
+
+    def record(inc: Increment) -> None:
+        # an increment that converges after a signal was announced naming it is not kept
+        interruption.checkpoint(comm)
+        increments.append(inc)
+        for pair, ratio in inc.penetration.items():
+            if ratio > PENETRATION_WARNING:
+                warn(pair, f"contact {pair}: overclosure reaches {ratio:.1%} of the slave node "
+                           f"spacing at t = {inc.t:.4g}; the penalty K is too soft for this mesh")
+        for pair, count in inc.detached.items():
+            if count:
+                warn(pair + " detached", f"contact {pair}: {count} slave node(s) in contact slid "
+                                         f"off the master surface at t = {inc.t:.4g}")
+        if writer is not None:
+            # a signal from now on stops the run after this increment, which is written
+            # whole first (the line names the next one: of the next step at t = 1); then
+            # every rank stops here, all together
+            interruption.where = ((inc.step + 1, 1) if inc.t - inc.step > 1.0 - 1e-12
+                                  else (inc.step, inc.increment + 1))
+            interruption.writing = True
+            try:
+                with solver.timers.measure("output"):
+                    writer.increment(inc)
+            finally:
+                interruption.writing = False
+            interruption.checkpoint(comm)
+        if progress is not None:
+            progress(inc)
+
+    def extra() -> dict:  # summary.json beyond the counts: what was run, and the warnings
+        if comm.rank != 0:
+            return {}
+        return {**provenance(problem, solver.reaction_groups(), solver.linear),
+                "warnings": list(warnings.values())}
+
+    try:
+        summary = solver.run(record)
+    except ConvergenceError:
+        solver.summary.wall = time.perf_counter() - start
+        if writer is not None:
+            interruption.writing = True  # (a signal now: the failure is still reported)
+            try:
+                writer.summary(solver.summary, extra())
+            finally:
+                interruption.writing = False
+        raise
+    summary.wall = time.perf_counter() - start
+    if writer is not None:
+        interruption.writing = True  # all converged: a signal now only changes the exit status
+        try:
+            writer.summary(summary, extra())
+        finally:
+            interruption.writing = False
+    return RunResult(problem, summary, increments, directory if write else None)
