@@ -21,6 +21,7 @@ autodoc_member_order = "bysource"
 autodoc_typehints = "signature"
 autodoc_default_options = {"members": True, "show-inheritance": False}
 myst_heading_anchors = 3
+myst_enable_extensions = ["dollarmath"]  # $...$ and $$...$$ in theory.md
 suppress_warnings = ["myst.header"]  # the README's sections start at level 2
 html_theme = "alabaster"
 html_theme_options = {"nosidebar": False}
