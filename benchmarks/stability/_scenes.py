@@ -296,7 +296,7 @@ def block_scene(case: dict):
     else:
         increments = int(case.get("increments", 10))
     # an initial gap is closed first; an initial penetration is ramped out over the press
-    # step and then acts in full (contact-theory.md 3.4), so the top moves by PRESS + gap
+    # step and then acts in full (docs/theory.md §3.4), so the top moves by PRESS + gap
     # in both cases: every gap ends in the zero-gap state
     press = PRESS + gap
     kw = _step_kw(case)

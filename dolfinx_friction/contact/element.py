@@ -1,4 +1,4 @@
-"""The node-to-surface contact element, batched over pairs (contact-theory.md §3-§7).
+"""The node-to-surface contact element, batched over pairs (docs/theory.md §3-§7).
 
 An element couples one slave node ``p`` with the nodes of one master: the
 ``nn`` nodes of a master face, or the single reference node of a rigid

@@ -1,4 +1,4 @@
-"""Coulomb friction by radial return (contact-theory.md §6) and its tangent (§7.1-7.2).
+"""Coulomb friction by radial return (docs/theory.md §6) and its tangent (§7.1-7.2).
 
 History is per slave node: ``w`` (slave minus master displacement at the
 projection), ``g_T`` (accumulated tangential relative displacement) and

@@ -5,7 +5,7 @@ The numpy path (:func:`~dolfinx_friction.contact.projection.project_numpy`,
 whole batches with ~60 numpy calls on stacks of tiny matrices; these kernels
 run the same mathematics as one loop over pairs: projection (Newton in the face
 parameters, same damping and stopping rules), kinematics with all derivatives
-(contact-theory.md §3, §5), normal law (§4.1), radial return (§6.3) and the
+(docs/theory.md §3, §5), normal law (§4.1), radial return (§6.3) and the
 exact tangent (§7).  Results equal the numpy path's to round-off
 (``tests/contact/test_kernels.py``).
 

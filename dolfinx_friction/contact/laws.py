@@ -1,4 +1,4 @@
-"""Pressure-overclosure laws (contact-theory.md §4.1, §4.2).
+"""Pressure-overclosure laws (docs/theory.md §4.1, §4.2).
 
 Each law maps the overclosure ``d = -g_N`` to a pressure ``p(d)`` and its slope,
 and gives the clearance cutoff beyond which a slave node gets no element.
@@ -56,7 +56,7 @@ class Exponential(Law):
     """``p = p0 exp(beta d)``, ``beta = ln(100)/c0``; force capped at e^23 (CalculiX's guard).
 
     Beyond the cap the force is constant and its slope is the exact zero, not
-    CalculiX's ``-beta' F_N`` (contact-theory.md §10.10).
+    CalculiX's ``-beta' F_N`` (docs/theory.md §10.10).
     """
 
     c0: float

@@ -1,4 +1,4 @@
-"""Closest-point projection of slave points onto master faces (contact-theory.md §3.2).
+"""Closest-point projection of slave points onto master faces (docs/theory.md §3.2).
 
 Newton's method on the orthogonality conditions ``c_a = r . q_,a = 0`` is run
 *unconstrained* to machine precision.  The stationary point is an interior

@@ -5,7 +5,7 @@ by a fixed table: vertices first (quadrilaterals in tensor order
 ``(-1,-1), (1,-1), (-1,1), (1,1)``), then one node per edge in basix's
 local edge order, then the face interior node.
 
-Parametric domains (contact-theory.md §3.1, §9): segments and quadrilaterals
+Parametric domains (docs/theory.md §3.1, §9): segments and quadrilaterals
 use ``[-1, 1]`` per coordinate, triangles the unit triangle.  The surface
 Jacobian vector ``m = q_,xi x q_,eta`` (3D) or ``m = R q_,xi`` (2D) then points
 out of the master body when the face is oriented as its owning cell demands

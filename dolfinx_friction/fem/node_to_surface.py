@@ -195,7 +195,7 @@ class NodeToSurface:
         default: the linear law with penalty ``K``, ``sigma_inf``, ``c0``.
     K, sigma_inf, c0 : float or str, optional
         The linear law's penalty [pressure/length], tension limit [pressure] and cutoff
-        factor; defaults 10 E/h (h: :attr:`spacing`), E / 70000, 1e-3 (contact-theory.md
+        factor; defaults 10 E/h (h: :attr:`spacing`), E / 70000, 1e-3 (docs/theory.md
         §8); ``K="calculix"``: CalculiX's 50 E.
     mu : float
         Coulomb friction coefficient (0: frictionless, the friction path is skipped).
@@ -227,7 +227,7 @@ class NodeToSurface:
         The contact law as used, defaults resolved (:meth:`resolved`).
     ramp : float
         Share of the initial overclosures (found at the first pairing) still removed from
-        the clearances (contact-theory.md §3.4): ``1 - t`` in a first static step that
+        the clearances (docs/theory.md §3.4): ``1 - t`` in a first static step that
         resolves them gradually, 0 otherwise (default).
     """
 

@@ -340,7 +340,7 @@ class ContactInteraction:
         """Element forces and tangents at the iterate ``u`` (start of increment ``u_n``).
 
         ``ramp`` is the share ``1 - tau`` of the initial overclosure still removed from
-        the clearance (first static step, contact-theory.md §3.4).  Collective: every
+        the clearance (first static step, docs/theory.md §3.4).  Collective: every
         rank gathers, whether or not it has elements.
         """
         el = self.elements

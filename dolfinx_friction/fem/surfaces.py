@@ -84,7 +84,7 @@ class SlaveNodes:
     """The owned slave nodes of a contact pair on this rank, with their areas ``A_p``.
 
     ``A_p = sum_f w_p,f A_f`` over the slave faces around the node
-    (contact-theory.md §2.1), thickness included in 2D; :meth:`update_areas`
+    (docs/theory.md §2.1), thickness included in 2D; :meth:`update_areas`
     recomputes it on the deformed faces (collective).
     """
 

@@ -24,7 +24,7 @@ that models the same problem as dolfinx_friction:
 * an element-face surface (``TYPE=ELEMENT``) for the slave and the master
   group of every contact pair.  The slave surface must be face based: from
   its faces CalculiX computes the representative areas ``A_p`` (a node-based
-  slave surface has none, contact-theory.md §2.1);
+  slave surface has none, docs/theory.md §2.1);
 * ``*CONTACT PAIR, TYPE=NODE TO SURFACE`` (without ``SMALL SLIDING`` CalculiX
   re-pairs in every iteration up to the 8th, as our default
   ``pairing_iterations = 8``; ``pairing_iterations = 1`` becomes ``SMALL

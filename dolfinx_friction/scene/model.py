@@ -120,7 +120,7 @@ class ContactPair:
         validate(self, RULES[ContactPair])
 
     def resolved(self, E_slave: float, spacing: Optional[float] = None) -> "ContactPair":
-        """Fill the defaults (contact-theory.md §8, scene-format.md version 2).
+        """Fill the defaults (docs/theory.md §8, scene-format.md version 2).
 
         ``sigma_inf = E/70000``, ``c0 = 1e-3``; with the slave node spacing ``h``
         (``spacing``, see :attr:`NodeToSurface.spacing`) also ``K = 10 E/h`` and

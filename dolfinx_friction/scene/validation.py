@@ -272,7 +272,7 @@ def pressure_table(value: Any, key: str) -> tuple[tuple[float, float], ...]:
     """Tabular law: >= 2 ``[pressure, overclosure]`` pairs, overclosure non-decreasing.
 
     Equal consecutive overclosures are accepted: the law separates them by 1e-10
-    as CalculiX does (contact-theory.md §4.1).
+    as CalculiX does (docs/theory.md §4.1).
     """
     if not _is_list(value) or len(value) < 2:
         fail(key, "must be a list of at least 2 [pressure, overclosure] pairs", value)
@@ -397,7 +397,7 @@ def check_shape(rigid: Any, key: str) -> None:
                  f"(it takes {', '.join(needed)})", getattr(rigid, name_))
 
 
-#: The keys a law cannot do without (the others have defaults, contact-theory.md §8).
+#: The keys a law cannot do without (the others have defaults, docs/theory.md §8).
 #: Keys of other laws are accepted and unused, so a sweep may switch ``law`` alone.
 _LAW_REQUIRES = {"exponential": ("p0",), "tabular": ("table",)}
 

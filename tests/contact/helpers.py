@@ -16,7 +16,7 @@
 
 Length scale: faces have a size of about ``L = 1``; penetrations are
 ``1e-4 .. 3e-2``; the finite-difference step is ``H = 1e-7 * L``
-(contact-theory.md §11).
+(docs/theory.md §11).
 """
 from __future__ import annotations
 

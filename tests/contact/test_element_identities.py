@@ -1,4 +1,4 @@
-"""Verification identities of contact-theory.md §11 (#2-#11) for every face type, law and state.
+"""Verification identities of docs/theory.md §11 (#2-#11) for every face type, law and state.
 
 Face types: L2, L3 (2D); T3, T6, Q4, Q9 (3D).  Laws: linear, exponential, tabular.
 States: ``open`` (0 < g_N < cutoff, mu = 0), ``frictionless`` (g_N < 0, mu = 0),

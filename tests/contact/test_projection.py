@@ -1,4 +1,4 @@
-"""Closest-point projection (projection.py; contact-theory.md §3.2, §10.4, §11 #1)."""
+"""Closest-point projection (projection.py; docs/theory.md §3.2, §10.4, §11 #1)."""
 import numpy as np
 import pytest
 

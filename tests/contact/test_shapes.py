@@ -61,7 +61,7 @@ def test_derivatives_against_finite_differences(name):
     assert worst2 < 2e-9
 
 
-_WEIGHTS = {  # contact-theory.md §2.1 (T6: CalculiX's code values) and §9/§10.11
+_WEIGHTS = {  # docs/theory.md §2.1 (T6: CalculiX's code values) and §9/§10.11
     "L2": [0.5, 0.5], "L3": [1 / 6, 1 / 6, 2 / 3], "T3": [1 / 3] * 3,
     "T6": [1 / 999] * 3 + [332 / 999] * 3, "Q4": [0.25] * 4,
     "Q9": [1 / 36] * 4 + [1 / 9] * 4 + [4 / 9],

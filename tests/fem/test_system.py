@@ -212,7 +212,7 @@ def test_condensed_solve_gives_the_direct_answer(shared_dir, mu):
 @pytest.mark.parametrize("mu", [0.0, 0.3])
 def test_frictionless_linear_jacobian_is_symmetric_and_factorised_ldlt(shared_dir, mu):
     """Linear bodies: the Jacobian is symmetric iff the contact is frictionless
-    (contact-theory 7.4), once its constrained columns are eliminated like its rows; the
+    (docs/theory.md §7.4), once its constrained columns are eliminated like its rows; the
     default solver then factorises LDL^T and reaches LU's reactions in LU's iterations.
     A body that is not linear is never taken as symmetric."""
     mesh = meshes.two_boxes(shared_dir / "boxes.msh")

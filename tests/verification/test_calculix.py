@@ -20,7 +20,7 @@ reactions agree to about 1e-7 in every increment, hexahedra and tetrahedra,
 with and without friction):
 
 * CalculiX computes ``A_p`` from the *deformed* slave faces at every pairing
-  (contact-theory.md §2.1), dolfinx_friction from the reference faces.  At
+  (docs/theory.md §2.1), dolfinx_friction from the reference faces.  At
   4 % compression that is 0.07 % of the normal reaction, and up to 1.3 % of
   the tangential reaction while the block sticks (``K_t = lambda A_p``).
 * Within an increment our pairing keeps a slave node on its master face up to
@@ -28,7 +28,7 @@ with and without friction):
   edge; CalculiX moves on to the neighbouring face (its tolerance is
   ``1e-3 sqrt(A_p)``).  On the indented (curved) master this changes the gap
   in the increment where a row of slave nodes crosses an edge: 0.2-0.4 %.
-* The initial-overclosure ramp of contact-theory.md §3.4 is not exercised
+* The initial-overclosure ramp of docs/theory.md §3.4 is not exercised
   (the bodies touch at zero gap).
 
 The worst difference is about 0.4 % of the reaction vector; the test asks for

@@ -279,7 +279,7 @@ def test_soft_penalty_converges_at_roundoff(shared_dir):
 
 def test_ramped_initial_overclosure_is_not_a_soft_penalty(shared_dir, caplog):
     """The block starts half a spacing inside the foundation; the press step ramps the
-    overclosure out (contact-theory.md 3.4) and ends pressed 0.01.  The law acts on 0.36 %
+    overclosure out (docs/theory.md §3.4) and ends pressed 0.01.  The law acts on 0.36 %
     of the spacing at most, and the penetration warning must measure that, not the
     geometric overlap (75 %)."""
     mesh = block_on_foundation(shared_dir / "overlap.msh", y0=-0.0625)

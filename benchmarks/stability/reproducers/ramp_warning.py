@@ -7,7 +7,7 @@ describes the solver before that commit.
 
 The block starts 0.0625 (half its node spacing) inside the foundation; its top is lifted so
 that it ends in the zero-gap state; the press step has 4 increments.  The overclosure is
-ramped out over the step (contact-theory.md 3.4): the law sees only a small part of it and
+ramped out over the step (docs/theory.md §3.4): the law sees only a small part of it and
 the forces are right.  But ``ContactInteraction.penetration`` measures ``-g_N`` without the
 ramp offset, so the run warns 'overclosure reaches 75.1 % of the slave node spacing ...
 the penalty K is too soft' at t = 0.25, when the overclosure the law acts on is < 1 %.
