@@ -65,8 +65,9 @@ class ContactSetupError(ValueError):
 
 @dataclass(frozen=True)
 class Surface:
-    """Facets of one body: those of ``tags`` (facet MeshTags of ``V.mesh``) equal to
-    ``value``, on the vector Lagrange space ``V`` of the body's displacement."""
+    """Facets of one body: those of ``tags`` (facet MeshTags of ``V.mesh`` itself: tags of
+    another mesh are refused) equal to ``value``, on the vector Lagrange space ``V`` of the
+    body's displacement."""
 
     V: object
     tags: object
@@ -165,6 +166,9 @@ def _facets(surface: Surface, role: str, comm: MPI.Comm) -> np.ndarray:
     if surface.tags.dim != mesh.topology.dim - 1:
         raise ContactSetupError(f"{role}: the tags have dimension {surface.tags.dim}, facets "
                                 f"of this mesh have {mesh.topology.dim - 1}")
+    if not compat.tags_of(surface.tags, mesh):
+        raise ContactSetupError(f"{role}: the tags of {surface.label} were made on another "
+                                f"mesh than the function space's: give the tags of V.mesh")
     facets = compat.tagged(surface.tags, surface.value)
     # each facet on one rank only: its owner (a ghost facet would count twice in the
     # slave areas and appear twice as a master face)

@@ -263,8 +263,14 @@ def test_own_newton_loop_matches_solve_steps():
 
 def test_bad_input_gets_one_clear_line():
     V, tags = block(0.0, 0.0, 1.0, 0.5, 4, 2)
+    W, other = block(0.0, 0.6, 1.0, 0.5, 2, 1)  # another mesh: its facet numbers fit V's too
     plane = rigid_plane([0, 0], [0, 1])
     cases = [
+        (lambda: NodeToSurface(Surface(V, other, BOTTOM), plane, E=E),
+         "slave: the tags of facets tagged 1 were made on another mesh"),
+        (lambda: NodeToSurface(Surface(W, other, BOTTOM), Surface(V, other, TOP),
+                               spaces=[W, V], E=E),
+         "master: the tags of facets tagged 2 were made on another mesh"),
         (lambda: NodeToSurface(Surface(V, tags, 7), plane, E=E), "no facet is tagged 7"),
         (lambda: NodeToSurface(Surface(compat.scalar_space(V.mesh, 1), tags, BOTTOM), plane,
                                E=E), "vector space"),
