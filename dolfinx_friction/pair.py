@@ -12,13 +12,16 @@ user's PETSc residual and Jacobian, in the numbering of the user's system:
 
 One increment of a load-stepping loop::
 
-    contact.begin(x)                    # converged state: search candidates, checkpoint
+    contact.begin(x)                    # first iterate: search candidates, checkpoint
     A = create_matrix(a, [contact])     # sparsity of the form plus the contact couplings
     for each Newton iterate x:
         contact.update(x)               # pair slave nodes with faces, evaluate elements
         ...assemble the bodies' residual into b...;  contact.add_residual(b, bcs)
         ...assemble their Jacobian into A...;        contact.add_jacobian(A, bcs)
     contact.commit()                    # or contact.rollback() before a smaller increment
+
+The slave areas and the slip origin are those of the converged state the increment starts
+from (the last commit's iterate, see :meth:`NodeToSurface.begin`), whatever the first iterate.
 
 Dirichlet rows are left as dolfinx makes them: the contact adds nothing to the rows and
 columns of the dofs of ``bcs``.  Units are the user's (force, length); a penalty ``K``
@@ -413,16 +416,25 @@ class NodeToSurface:
     # ------------------------------------------------------------- increments
     def begin(self, x: PETSc.Vec, start: Optional[PETSc.Vec] = None) -> None:
         """Start an increment (collective): checkpoint the friction history for
-        :meth:`rollback`, update the slave areas and search the candidate master faces
-        of every slave node at ``x``, the increment's first iterate.  ``start`` is the
-        converged state the increment starts from (default ``x``): slip is measured
-        from it."""
+        :meth:`rollback` and search the candidate master faces of every slave node at
+        ``x``, the increment's first iterate (a predictor, or the last converged state).
+
+        What is measured at the start of the increment is measured at ``start``, the
+        converged state the increment starts from, whatever ``x`` is: the slave areas
+        ``A_p`` (and with them the contact forces' scale and the pairing cutoff), and the
+        origin of the slip of nodes that touch anew.  Default: the iterate at which the
+        last :meth:`commit` accepted an increment (before the first one: ``x``).  So the
+        converged answer does not depend on the first iterate."""
         if self._u_n is None:
             self._u_n = x.duplicate()
-        (x if start is None else start).copy(self._u_n)
+            (x if start is None else start).copy(self._u_n)
+        elif start is not None:
+            start.copy(self._u_n)
         self._evaluated_at = None
         self._saved = self._interaction.save()
-        self._search(x, update_areas=True)
+        self._load_fields(self._u_n)
+        self._interaction.measure_areas()
+        self._search(x, first=True)
         self._iteration = 0
 
     def update(self, x: PETSc.Vec, pairing: bool = True, search: bool = True) -> bool:
@@ -442,7 +454,7 @@ class NodeToSurface:
             inter.pair(x, self._iteration)
             if (search and self._iteration > 0
                     and self.comm.allreduce(int(inter.needs_search()))):
-                self._search(x, update_areas=False)
+                self._search(x, first=False)
                 inter.pair(x, self._iteration)
                 changed = True
             inter.mark_off_surface()
@@ -468,7 +480,10 @@ class NodeToSurface:
         return self.comm.allreduce(int(not same)) == 0
 
     def commit(self) -> None:
-        """Accept the increment: its trial friction history becomes the start state."""
+        """Accept the increment at the iterate of the last :meth:`update`: its trial friction
+        history and the iterate itself become the start state of the next increment."""
+        if self._evaluated_at is not None:
+            self._u_n.setArray(self._evaluated_at[0])
         self._evaluated_at = None
         self._interaction.commit()
         self._saved = None
@@ -479,17 +494,21 @@ class NodeToSurface:
         if self._saved is not None:
             self._interaction.restore(self._saved)
 
-    def _search(self, x: PETSc.Vec, update_areas: bool) -> None:
-        before = self._interaction.candidates.nodes
+    def _load_fields(self, x: PETSc.Vec) -> None:
+        """Copy the bodies' displacements in ``x`` into their Functions (collective)."""
         for f in self._fields:
             f.u.x.array[: f.n_owned * self.gdim] = x.getArray(readonly=True)[
                 self.layout.owned_slice(f.block, self.gdim)]
             compat.scatter_forward(f.u)
+
+    def _search(self, x: PETSc.Vec, first: bool) -> None:
+        before = self._interaction.candidates.nodes
+        self._load_fields(x)
         master_u = None
         if self._master_field is not None:
             f = self._master_field
             master_u = f.u.x.array.reshape(-1, self.gdim)[self._interaction.master.local]
-        self._interaction.search(x, master_u, update_areas)
+        self._interaction.search(x, master_u, first)
         same = np.array_equal(before, self._interaction.candidates.nodes)
         if self.comm.allreduce(0 if same else 1):
             self.couplings_version += 1
