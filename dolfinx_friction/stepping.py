@@ -110,8 +110,9 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
     conditions' Functions or Constants, obstacle translations, load Constants,
     :attr:`BlockProblem.f_ext`.  The displacement rate of the last increment predicts the
     next one (the first iterate: what the contacts measure at the start of an increment is
-    taken from the converged state, so the predictor changes no answer).  ``on_increment`` sees each converged increment before its history is
-    committed.  Raises :class:`ConvergenceError`.
+    taken from the converged state, so the predictor changes no answer).  ``on_increment``
+    sees each converged increment before its history is committed.  Raises
+    :class:`ConvergenceError`.
     """
     newton = newton or Newton()
     x = problem.x
