@@ -89,6 +89,7 @@ class Elements:
     xi: Optional[np.ndarray] = None  # last projection point, a start for the next one
     result: Optional[ElementResult] = None
     roundoff: Optional[np.ndarray] = None  # (n, nodes * gdim) round-off scale of the forces
+    normal: Optional[np.ndarray] = None  # (n, gdim) unit contact normals at the evaluation
 
 
 #: Parametric distance by which a slave node may pass its current face's edge and keep
@@ -351,7 +352,7 @@ class ContactInteraction:
         every = np.arange(len(s))
         u_slaves = self._slave_gather(u)
         kin = self._kinematics(el, every, u_slaves, self._gather(u), el.xi)
-        el.xi = kin.xi
+        el.xi, el.normal = kin.xi, kin.normal
         history = None
         if self.params.mu > 0.0:
             history = self.history.take(s)

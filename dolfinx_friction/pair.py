@@ -38,7 +38,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction import compat
-from dolfinx_friction.contact.element import ContactParameters
+from dolfinx_friction.contact.element import OPEN, ContactParameters
 from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.fields import BodyField, DofLayout
 from dolfinx_friction.gmsh_io import BodyMesh
@@ -153,6 +153,21 @@ class ContactState:
     def has_element(self) -> np.ndarray:
         """The nodes paired with a master (open or closed), (n,) bool."""
         return self.status != NO_ELEMENT
+
+
+@dataclass
+class Support:
+    """Where a contact pair holds its slave body against its master: this rank's closed
+    slave nodes (stick or slip) at the last :meth:`NodeToSurface.update`.  A frictionless
+    pair resists the relative motion of slave and master along the normal there, a
+    frictional one in every direction."""
+
+    slave: int  # block of the slave body in the pair's spaces
+    master: Optional[int]  # block of the master body; None for a rigid obstacle
+    obstacle: Optional[int]  # index of a rigid obstacle whose translation is an unknown
+    frictional: bool
+    x: np.ndarray  # (n, gdim) current coordinates of the closed slave nodes [length]
+    normal: np.ndarray  # (n, gdim) their unit contact normals
 
 
 def _check_space(V, role: str) -> int:
@@ -274,6 +289,7 @@ class NodeToSurface:
                     raise ContactSetupError(f"{name}: the obstacle's {key} has {len(v)} "
                                             f"components, the mesh is {self.gdim}D")
             self._master_field = None
+            self._obstacle = obstacle_index
             node = None
             if obstacle_index is not None:
                 if not 0 <= obstacle_index < n_obstacles:
@@ -288,6 +304,7 @@ class NodeToSurface:
                 if comm.allreduce(len(shared)):
                     raise ContactSetupError(f"{name}: slave and master share facets: a "
                                             f"surface cannot contact itself")
+            self._obstacle = None
             self._master_field = self._field(master.V, "master", master_facets, thickness)
             # each facet once over all ranks: the ones this rank owns
             master_side = master_faces(self._master_field, "master")
@@ -728,6 +745,20 @@ class NodeToSurface:
         before, now, off = self.comm.allreduce(
             np.array([inter.closed.sum(), inter.counts()[0], inter.detached()]))
         return bool(before > 0 and now == 0 and off > 0)
+
+    def support(self) -> Support:
+        """Where the pair holds its bodies against each other now (this rank's closed slave
+        nodes; none before the first :meth:`update`)."""
+        el = self._interaction.elements
+        if el.result is None:
+            s, normal = np.zeros(0, np.int64), np.zeros((0, self.gdim))
+        else:
+            closed = el.result.status != OPEN
+            s, normal = el.slave[closed], el.normal[closed]
+        master = self._master_field
+        return Support(self._slave_field.block, None if master is None else master.block,
+                       self._obstacle, self.mu > 0.0,
+                       self._interaction.slaves.X[s] + self._u_slaves[s], normal)
 
     def counts(self) -> tuple[int, int]:
         """Slave nodes in contact (closed) and slipping, over all ranks (collective)."""

@@ -318,6 +318,103 @@ def test_increments_do_not_depend_on_their_first_iterate():
     assert len(worst) == len(SLIDE) and max(worst) < 1e-9
 
 
+def resting(cell=mesh.CellType.quadrilateral, mu=0.0, spring=0.0):
+    """A block whose top is pressed down 0.01 onto a rigid plane and held only normally
+    (2D: y; 3D: z): with mu = 0 and no ``spring`` (a foundation of that stiffness per area
+    on its whole boundary, in the plane's directions) nothing holds its motions along the
+    plane.  Returns the problem, its contact and the load function."""
+    if cell == mesh.CellType.hexahedron:
+        m = mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [1, 1, 0.5]], [2, 2, 1], cell)
+        facets = [mesh.locate_entities_boundary(m, 2, lambda x, z=z: np.isclose(x[2], z))
+                  for z in (0.0, 0.5)]
+        V = compat.vector_space(m, 1)
+        tags = mesh.meshtags(m, 2, *(np.concatenate(a)[np.argsort(np.concatenate(facets))]
+                                     for a in (facets, [np.full(len(f), t, np.int32) for f, t
+                                                        in zip(facets, (BOTTOM, TOP))])))
+    else:
+        V, tags = block(0.0, 0.0, 1.0, 0.5, 4, 2, cell)
+    d = V.mesh.geometry.dim
+    u, v = fem.Function(V), ufl.TestFunction(V)
+    lam, G = E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU))
+    eps = ufl.sym(ufl.grad(u))
+    F = ufl.inner(2 * G * eps + lam * ufl.tr(eps) * ufl.Identity(d), ufl.grad(v)) * ufl.dx
+    if spring:
+        F += spring * sum(u[i] * v[i] for i in range(d - 1)) * ufl.ds
+    g = compat.scalar_constant(V.mesh, 0.0)
+    held = fem.dirichletbc(g, fem.locate_dofs_topological(V.sub(d - 1), d - 1, tags.find(TOP)),
+                           V.sub(d - 1))
+    plane = rigid_plane(np.zeros(d), np.eye(d)[-1])
+    contact = NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=mu, K=1e5,
+                            stick_slope=1e4)
+    problem = BlockProblem([F], [u], [held], [contact])
+
+    def press(t):
+        g.value = -0.01 * t
+    return problem, contact, press
+
+
+def test_a_rigid_motion_that_nothing_holds_is_refused():
+    """A block on a frictionless rigid plane, held only normally at its top, converged to an
+    arbitrary sideways drift (the Jacobian is singular along the plane, the residual does
+    not see the drift): solve_steps, snes_solve and Newton now stop at the first converged
+    state with one line naming the body and the motion.  With friction, or a spring along
+    the plane, nothing is said."""
+    problem, contact, press = resting()
+    with pytest.raises(ContactSetupError) as info:
+        solve_steps(problem, press, 2)
+    message = str(info.value)
+    assert message.startswith("body 0 can move rigidly (translation along (1, 0)) with nothing "
+                              "to hold it") and "\n" not in message, message
+    problem, contact, press = resting()
+    press(1.0)
+    problem.apply_bcs()
+    contact.begin(problem.x)
+    with pytest.raises(ContactSetupError, match=r"translation along \(1, 0\)"):
+        snes_solve(problem)
+    for kind in ({"mu": 0.3}, {"spring": 1e-3 * E}):
+        problem, contact, press = resting(**kind)
+        solve_steps(problem, press, 2)
+        assert statuses(contact) <= {1, 2}  # closed everywhere
+
+
+def test_free_motions_in_3d_are_named():
+    """3D: a box on a frictionless plane, held only in z at its top, is free along x and y
+    and about z; the line names one motion and counts the others."""
+    problem, contact, press = resting(mesh.CellType.hexahedron)
+    press(1.0)
+    problem.apply_bcs()
+    contact.begin(problem.x)
+    with pytest.raises(ContactSetupError) as info:
+        Newton().solve(problem)
+    message = str(info.value)
+    assert "body 0 can move rigidly (translation along (" in message, message
+    assert "; 2 more such motions)" in message and "\n" not in message, message
+
+
+@pytest.mark.parametrize("d, expected", [
+    (2, "body 'block' can move rigidly (rotation about (0.75, 0.5)) with nothing to hold it"),
+    (3, "body 'block' can move rigidly (rotation about the axis (0, 0, 1) through "
+        "(0.5, 0.5, 0.25)) with nothing to hold it")])
+def test_a_free_rotation_is_named_with_its_axis(d, expected):
+    """A body held only at the nodes on a line (2D: a point) can turn about it; the body is
+    named as given to BlockProblem."""
+    if d == 2:
+        V, _ = block(0.0, 0.0, 1.0, 0.5, 4, 2)
+        pinned = lambda x: np.isclose(x[0], 0.75) & np.isclose(x[1], 0.5)  # noqa: E731
+    else:
+        V = compat.vector_space(mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [1, 1, 0.5]],
+                                                [2, 2, 1], mesh.CellType.hexahedron), 1)
+        pinned = lambda x: np.isclose(x[0], 0.5) & np.isclose(x[1], 0.5)  # noqa: E731
+    u, v = fem.Function(V), ufl.TestFunction(V)
+    eps = ufl.sym(ufl.grad(u))
+    F = ufl.inner(E * eps + E * ufl.tr(eps) * ufl.Identity(d), ufl.grad(v)) * ufl.dx
+    held = fem.dirichletbc(np.zeros(d), fem.locate_dofs_geometrical(V, pinned), V)
+    problem = BlockProblem([F], [u], [held], names=["block"])
+    with pytest.raises(ContactSetupError) as info:
+        Newton().solve(problem)
+    assert str(info.value).startswith(expected), str(info.value)
+
+
 def test_bad_input_gets_one_clear_line():
     V, tags = block(0.0, 0.0, 1.0, 0.5, 4, 2)
     W, other = block(0.0, 0.6, 1.0, 0.5, 2, 1)  # another mesh: its facet numbers fit V's too
