@@ -19,6 +19,7 @@ class OutputError(OSError):
 _INPUT_ERRORS = (("dolfinx_friction.validation", "SceneError"),
                  ("dolfinx_friction.gmsh_io", "MeshError"),
                  ("dolfinx_friction.problem", "ModelError"),
+                 ("dolfinx_friction.pair", "ContactSetupError"),  # e.g. a body left free
                  ("dolfinx_friction.errors", "OutputError"))
 _DIVERGED_ERRORS = (("dolfinx_friction.solver", "ConvergenceError"),)
 
