@@ -330,6 +330,14 @@ def tagged(tags, value: int) -> np.ndarray:
     return np.asarray(tags.indices[tags.values == value], dtype=np.int32)
 
 
+def tags_of(tags, mesh: dolfinx.mesh.Mesh) -> bool:
+    """Whether the MeshTags ``tags`` were made on ``mesh`` (the same topology object: 0.9's
+    ``tags.topology``, 0.5's ``tags.mesh.topology``; pybind11 and nanobind hand out one
+    wrapper per C++ object)."""
+    topology = tags.topology if NEW_API else tags.mesh.topology
+    return topology is mesh.topology
+
+
 def scalar_constant(mesh: dolfinx.mesh.Mesh, value: float):
     """A ``fem.Constant`` holding a real scalar (0.9 wants a numpy scalar of
     ``dolfinx.default_scalar_type``; 0.5 takes a Python float)."""

@@ -19,6 +19,7 @@ class OutputError(OSError):
 _INPUT_ERRORS = (("dolfinx_friction.scene.validation", "SceneError"),
                  ("dolfinx_friction.io.gmsh", "MeshError"),
                  ("dolfinx_friction.scene.build", "ModelError"),
+                 ("dolfinx_friction.fem.node_to_surface", "ContactSetupError"),  # e.g. a body left free
                  ("dolfinx_friction.errors", "OutputError"))
 _DIVERGED_ERRORS = (("dolfinx_friction.scene.driver", "ConvergenceError"),)
 

@@ -26,6 +26,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
 from dolfinx_friction.fem.pattern import CooPattern
+from dolfinx_friction.fem.rigid_motions import RigidMotions
 from dolfinx_friction.fem.numbering import DofLayout
 from dolfinx_friction.fem.node_to_surface import ContactSetupError, NodeToSurface
 
@@ -145,12 +146,14 @@ class BlockProblem:
         Rigid obstacles whose translations are unknowns (pairs built with ``n_obstacles``
         = this and their ``obstacle_index``); their rows get the contact forces minus
         :attr:`f_ext`, or are constrained (:meth:`prescribe`).
+    names : sequence of str, optional
+        The bodies' names in messages (default: body 0, body 1, ...).
     """
 
     def __init__(self, residuals: Sequence[ufl.Form], u: Sequence, bcs: Sequence = (),
                  contacts: Sequence[NodeToSurface] = (),
                  jacobians: Optional[Sequence[Optional[ufl.Form]]] = None,
-                 obstacles: int = 0):
+                 obstacles: int = 0, names: Optional[Sequence[str]] = None):
         if len(residuals) != len(u):
             raise ContactSetupError(f"{len(residuals)} residual forms for {len(u)} bodies")
         self.spaces = [w.function_space for w in u]
@@ -189,6 +192,7 @@ class BlockProblem:
         self._constrained = self._bc_rows
         self.gather()
         self._base, values = self._bulk_pattern()
+        self._motions = self._rigid_motions(names)
         self._linear_data = {k: self._base.gather_values(k, values[k])
                              for k, body in enumerate(self.bodies) if body.linear}
         #: bodies whose residual dolfinx assembles (the others are K u)
@@ -230,7 +234,7 @@ class BlockProblem:
         """Whether the Jacobian is symmetric once its constrained rows and columns are
         eliminated (``jacobian(x, symmetric=True)``): every body linear with a symmetric
         stiffness (checked once, to :data:`SYMMETRY_TOL`; collective) and every contact
-        frictionless (its force derives from a potential: docs/theory.md §7.4)."""
+        frictionless (its force derives from a potential: contact-theory 7.4)."""
         return self._bodies_symmetric() and all(c.mu == 0.0 for c in self.contacts)
 
     def _bodies_symmetric(self) -> bool:
@@ -531,6 +535,54 @@ class BlockProblem:
             self._spring = 1e-12 * self.comm.allreduce(float(diagonal.max(initial=0.0)),
                                                        op=MPI.MAX)
         return self._spring
+
+    def _rigid_motions(self, names: Optional[Sequence[str]]) -> RigidMotions:
+        """The bodies' rigid motions, with what their own Jacobians (just assembled at the
+        initial displacement) hold of them (collective)."""
+        X = [V.tabulate_dof_coordinates()[: V.dofmap.index_map.size_local, : self.gdim]
+             for V in self.spaces]
+        #: (owned nodes, gdim) reference coordinates of this rank's nodes (0 for obstacles)
+        self._X = np.concatenate(X + [np.zeros((self.layout.n_owned - sum(map(len, X)),
+                                                self.gdim))])
+        labels = ([repr(str(n)) for n in names] if names is not None
+                  else [str(k) for k in range(len(self.bodies))])
+        motions = RigidMotions(self.comm, X, self.n_obstacles, labels)
+        for k, body in enumerate(self.bodies):
+            motions.add_stiffness(k, body.A, X[k])
+        return motions
+
+    def check_held(self) -> None:
+        """Raise :class:`~dolfinx_friction.ContactSetupError` (one line naming the body and
+        the motion, on every rank) where a body can move rigidly with nothing to hold it
+        now: no constrained row, no closed contact node (along its normal if frictionless,
+        in every direction with friction) and no stiffness of the body's own form (a
+        spring) resists the motion, so that a converged solution may carry any amount of
+        it (:mod:`dolfinx_friction.fem.rigid_motions`).  Collective; the contacts as at their last
+        update.  :class:`~dolfinx_friction.Newton` and :func:`~dolfinx_friction.snes_solve`
+        call it on convergence."""
+        d, motions, offsets = self.gdim, self._motions, self.layout.block_offsets
+        n_bodies = len(self.bodies)
+        x = self._X + self.x.getArray(readonly=True).reshape(-1, d)  # current coordinates
+        motions.move([x[offsets[k]:offsets[k + 1]] for k in range(n_bodies)])
+        rows = self.constrained_rows
+        nodes = rows // d
+        owner = np.searchsorted(offsets, nodes, side="right") - 1
+        obstacle = owner == n_bodies  # obstacle j is owner n_bodies + j
+        owner[obstacle] += nodes[obstacle] - offsets[n_bodies]
+        holding = [motions.rows(owner, x[nodes], np.eye(d)[rows % d])]
+        for c in self.contacts:
+            s = c.support()
+            other = (s.master if s.master is not None
+                     else None if s.obstacle is None else n_bodies + s.obstacle)
+            for e in ([np.tile(e, (len(s.x), 1)) for e in np.eye(d)] if s.frictional
+                      else [s.normal]):
+                relative = motions.rows(s.slave, s.x, e)
+                if other is not None:
+                    relative -= motions.rows(other, s.x, e)
+                holding.append(relative)
+        message = motions.unheld(holding)
+        if message:
+            raise ContactSetupError(message)
 
     def rigid_body_modes(self) -> PETSc.NullSpace:
         """Translations and rotations of every body, orthonormal (collective): the near null

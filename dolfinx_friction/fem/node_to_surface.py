@@ -12,13 +12,16 @@ user's PETSc residual and Jacobian, in the numbering of the user's system:
 
 One increment of a load-stepping loop::
 
-    contact.begin(x)                    # converged state: search candidates, checkpoint
+    contact.begin(x)                    # first iterate: search candidates, checkpoint
     A = create_matrix(a, [contact])     # sparsity of the form plus the contact couplings
     for each Newton iterate x:
         contact.update(x)               # pair slave nodes with faces, evaluate elements
         ...assemble the bodies' residual into b...;  contact.add_residual(b, bcs)
         ...assemble their Jacobian into A...;        contact.add_jacobian(A, bcs)
     contact.commit()                    # or contact.rollback() before a smaller increment
+
+The slave areas and the slip origin are those of the converged state the increment starts
+from (the last commit's iterate, see :meth:`NodeToSurface.begin`), whatever the first iterate.
 
 Dirichlet rows are left as dolfinx makes them: the contact adds nothing to the rows and
 columns of the dofs of ``bcs``.  Units are the user's (force, length); a penalty ``K``
@@ -35,7 +38,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
-from dolfinx_friction.contact.element import ContactParameters
+from dolfinx_friction.contact.element import OPEN, ContactParameters
 from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.fem.numbering import BodyField, DofLayout
 from dolfinx_friction.io.gmsh import BodyMesh
@@ -65,8 +68,9 @@ class ContactSetupError(ValueError):
 
 @dataclass(frozen=True)
 class Surface:
-    """Facets of one body: those of ``tags`` (facet MeshTags of ``V.mesh``) equal to
-    ``value``, on the vector Lagrange space ``V`` of the body's displacement."""
+    """Facets of one body: those of ``tags`` (facet MeshTags of ``V.mesh`` itself: tags of
+    another mesh are refused) equal to ``value``, on the vector Lagrange space ``V`` of the
+    body's displacement."""
 
     V: object
     tags: object
@@ -151,6 +155,21 @@ class ContactState:
         return self.status != NO_ELEMENT
 
 
+@dataclass
+class Support:
+    """Where a contact pair holds its slave body against its master: this rank's closed
+    slave nodes (stick or slip) at the last :meth:`NodeToSurface.update`.  A frictionless
+    pair resists the relative motion of slave and master along the normal there, a
+    frictional one in every direction."""
+
+    slave: int  # block of the slave body in the pair's spaces
+    master: Optional[int]  # block of the master body; None for a rigid obstacle
+    obstacle: Optional[int]  # index of a rigid obstacle whose translation is an unknown
+    frictional: bool
+    x: np.ndarray  # (n, gdim) current coordinates of the closed slave nodes [length]
+    normal: np.ndarray  # (n, gdim) their unit contact normals
+
+
 def _check_space(V, role: str) -> int:
     gdim = V.mesh.geometry.dim
     if V.dofmap.index_map_bs != gdim:
@@ -165,6 +184,9 @@ def _facets(surface: Surface, role: str, comm: MPI.Comm) -> np.ndarray:
     if surface.tags.dim != mesh.topology.dim - 1:
         raise ContactSetupError(f"{role}: the tags have dimension {surface.tags.dim}, facets "
                                 f"of this mesh have {mesh.topology.dim - 1}")
+    if not compat.tags_of(surface.tags, mesh):
+        raise ContactSetupError(f"{role}: the tags of {surface.label} were made on another "
+                                f"mesh than the function space's: give the tags of V.mesh")
     facets = compat.tagged(surface.tags, surface.value)
     # each facet on one rank only: its owner (a ghost facet would count twice in the
     # slave areas and appear twice as a master face)
@@ -267,6 +289,7 @@ class NodeToSurface:
                     raise ContactSetupError(f"{name}: the obstacle's {key} has {len(v)} "
                                             f"components, the mesh is {self.gdim}D")
             self._master_field = None
+            self._obstacle = obstacle_index
             node = None
             if obstacle_index is not None:
                 if not 0 <= obstacle_index < n_obstacles:
@@ -281,6 +304,7 @@ class NodeToSurface:
                 if comm.allreduce(len(shared)):
                     raise ContactSetupError(f"{name}: slave and master share facets: a "
                                             f"surface cannot contact itself")
+            self._obstacle = None
             self._master_field = self._field(master.V, "master", master_facets, thickness)
             # each facet once over all ranks: the ones this rank owns
             master_side = master_faces(self._master_field, "master")
@@ -409,16 +433,25 @@ class NodeToSurface:
     # ------------------------------------------------------------- increments
     def begin(self, x: PETSc.Vec, start: Optional[PETSc.Vec] = None) -> None:
         """Start an increment (collective): checkpoint the friction history for
-        :meth:`rollback`, update the slave areas and search the candidate master faces
-        of every slave node at ``x``, the increment's first iterate.  ``start`` is the
-        converged state the increment starts from (default ``x``): slip is measured
-        from it."""
+        :meth:`rollback` and search the candidate master faces of every slave node at
+        ``x``, the increment's first iterate (a predictor, or the last converged state).
+
+        What is measured at the start of the increment is measured at ``start``, the
+        converged state the increment starts from, whatever ``x`` is: the slave areas
+        ``A_p`` (and with them the contact forces' scale and the pairing cutoff), and the
+        origin of the slip of nodes that touch anew.  Default: the iterate at which the
+        last :meth:`commit` accepted an increment (before the first one: ``x``).  So the
+        converged answer does not depend on the first iterate."""
         if self._u_n is None:
             self._u_n = x.duplicate()
-        (x if start is None else start).copy(self._u_n)
+            (x if start is None else start).copy(self._u_n)
+        elif start is not None:
+            start.copy(self._u_n)
         self._evaluated_at = None
         self._saved = self._interaction.save()
-        self._search(x, update_areas=True)
+        self._load_fields(self._u_n)
+        self._interaction.measure_areas()
+        self._search(x, first=True)
         self._iteration = 0
 
     def update(self, x: PETSc.Vec, pairing: bool = True, search: bool = True) -> bool:
@@ -438,7 +471,7 @@ class NodeToSurface:
             inter.pair(x, self._iteration)
             if (search and self._iteration > 0
                     and self.comm.allreduce(int(inter.needs_search()))):
-                self._search(x, update_areas=False)
+                self._search(x, first=False)
                 inter.pair(x, self._iteration)
                 changed = True
             inter.mark_off_surface()
@@ -464,7 +497,10 @@ class NodeToSurface:
         return self.comm.allreduce(int(not same)) == 0
 
     def commit(self) -> None:
-        """Accept the increment: its trial friction history becomes the start state."""
+        """Accept the increment at the iterate of the last :meth:`update`: its trial friction
+        history and the iterate itself become the start state of the next increment."""
+        if self._evaluated_at is not None:
+            self._u_n.setArray(self._evaluated_at[0])
         self._evaluated_at = None
         self._interaction.commit()
         self._saved = None
@@ -475,17 +511,21 @@ class NodeToSurface:
         if self._saved is not None:
             self._interaction.restore(self._saved)
 
-    def _search(self, x: PETSc.Vec, update_areas: bool) -> None:
-        before = self._interaction.candidates.nodes
+    def _load_fields(self, x: PETSc.Vec) -> None:
+        """Copy the bodies' displacements in ``x`` into their Functions (collective)."""
         for f in self._fields:
             f.u.x.array[: f.n_owned * self.gdim] = x.getArray(readonly=True)[
                 self.layout.owned_slice(f.block, self.gdim)]
             compat.scatter_forward(f.u)
+
+    def _search(self, x: PETSc.Vec, first: bool) -> None:
+        before = self._interaction.candidates.nodes
+        self._load_fields(x)
         master_u = None
         if self._master_field is not None:
             f = self._master_field
             master_u = f.u.x.array.reshape(-1, self.gdim)[self._interaction.master.local]
-        self._interaction.search(x, master_u, update_areas)
+        self._interaction.search(x, master_u, first)
         same = np.array_equal(before, self._interaction.candidates.nodes)
         if self.comm.allreduce(0 if same else 1):
             self.couplings_version += 1
@@ -705,6 +745,20 @@ class NodeToSurface:
         before, now, off = self.comm.allreduce(
             np.array([inter.closed.sum(), inter.counts()[0], inter.detached()]))
         return bool(before > 0 and now == 0 and off > 0)
+
+    def support(self) -> Support:
+        """Where the pair holds its bodies against each other now (this rank's closed slave
+        nodes; none before the first :meth:`update`)."""
+        el = self._interaction.elements
+        if el.result is None:
+            s, normal = np.zeros(0, np.int64), np.zeros((0, self.gdim))
+        else:
+            closed = el.result.status != OPEN
+            s, normal = el.slave[closed], el.normal[closed]
+        master = self._master_field
+        return Support(self._slave_field.block, None if master is None else master.block,
+                       self._obstacle, self.mu > 0.0,
+                       self._interaction.slaves.X[s] + self._u_slaves[s], normal)
 
     def counts(self) -> tuple[int, int]:
         """Slave nodes in contact (closed) and slipping, over all ranks (collective)."""

@@ -89,6 +89,7 @@ class Elements:
     xi: Optional[np.ndarray] = None  # last projection point, a start for the next one
     result: Optional[ElementResult] = None
     roundoff: Optional[np.ndarray] = None  # (n, nodes * gdim) round-off scale of the forces
+    normal: Optional[np.ndarray] = None  # (n, gdim) unit contact normals at the evaluation
 
 
 #: Parametric distance by which a slave node may pass its current face's edge and keep
@@ -165,23 +166,26 @@ class ContactInteraction:
         self._centroids = X.mean(axis=1)
         self._face_ids = np.concatenate([f[2] for f in incoming])
 
+    def measure_areas(self) -> None:
+        """The slave areas, and the cutoff that scales with them, on the faces as the slave
+        body's Function deforms them (collective): at the start of an increment."""
+        self.slaves.update_areas()
+        self.cutoff = self.params.law.cutoff(self.slaves.area)
+
     def search(self, u: PETSc.Vec, u_faces_local: Optional[np.ndarray],
-               update_areas: bool = True) -> None:
+               first: bool = True) -> None:
         """Candidate masters of every slave node (collective).
 
-        Called once per increment, and again within it only when a slave node
-        slides past all its candidates (:meth:`needs_search`).  Updates the slave
-        areas on the deformed faces (unless ``update_areas`` is false), receives
-        the master faces near this rank's slave nodes and keeps, for each slave
-        node, the faces with the nearest centroids: pairing chooses among them,
-        so the matrix pattern of the contact couplings changes only with a search.
+        Called once per increment (``first``), and again within it only when a slave
+        node slides past all its candidates (:meth:`needs_search`).  Receives the master
+        faces near this rank's slave nodes and keeps, for each slave node, the faces
+        with the nearest centroids: pairing chooses among them, so the matrix pattern of
+        the contact couplings changes only with a search.
         """
         if self._slave_gather is None:
             self._slave_gather = NodeValues(u, self.slaves.nodes, self.gdim)
-        if update_areas:  # the first search of an increment
+        if first:
             self.off_surface[:] = False
-            self.slaves.update_areas()
-            self.cutoff = self.params.law.cutoff(self.slaves.area)
         n = len(self.slaves.nodes)
         if self.rigid:
             node = self.master.node
@@ -348,7 +352,7 @@ class ContactInteraction:
         every = np.arange(len(s))
         u_slaves = self._slave_gather(u)
         kin = self._kinematics(el, every, u_slaves, self._gather(u), el.xi)
-        el.xi = kin.xi
+        el.xi, el.normal = kin.xi, kin.normal
         history = None
         if self.params.mu > 0.0:
             history = self.history.take(s)

@@ -106,7 +106,9 @@ class Newton:
         displacement test of ``convergence="reactions"``; ``may_stall``: give up after
         :attr:`stall` iterations without a new lowest residual (where the caller can cut
         back: :func:`~dolfinx_friction.nls.stepping.solve_steps` while cutbacks are left;
-        else only ``max_iterations`` stops it)."""
+        else only ``max_iterations`` stops it).  A converged state in which a body can move
+        rigidly with nothing to hold it raises :class:`~dolfinx_friction.ContactSetupError`
+        (:meth:`BlockProblem.check_held`)."""
         x, b = problem.x, problem.b
         dx = x.duplicate()
         settling = self.convergence == "reactions"
@@ -159,6 +161,8 @@ class Newton:
         if settling and start is None:
             x_n.destroy()
         problem.scatter()
+        if trace.converged:
+            problem.check_held()
         return trace
 
     @staticmethod
@@ -271,7 +275,9 @@ def snes_solve(problem: BlockProblem, prefix: str = "dolfinx_friction_snes_",
     every SNES/KSP option and monitor under ``prefix`` applies).  The contacts must have
     begun; they are paired at every residual evaluation, without a new search (the
     couplings stay those of :meth:`BlockProblem.matrix`).  Returns SNES's converged
-    reason (> 0: converged)."""
+    reason (> 0: converged); a converged state in which a body can move rigidly with
+    nothing to hold it raises :class:`~dolfinx_friction.ContactSetupError`
+    (:meth:`BlockProblem.check_held`)."""
     defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "ksp_type": "preonly",
                 "pc_type": "lu", "pc_factor_mat_solver_type": "mumps", "snes_rtol": 1e-9,
                 "snes_atol": 1e-10}
@@ -298,4 +304,6 @@ def snes_solve(problem: BlockProblem, prefix: str = "dolfinx_friction_snes_",
     reason = snes.getConvergedReason()
     snes.destroy()
     problem.scatter()
+    if reason > 0:
+        problem.check_held()
     return reason

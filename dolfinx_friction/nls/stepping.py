@@ -109,8 +109,10 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
     ``load(t)`` sets everything prescribed at ``t``: the values of the Dirichlet
     conditions' Functions or Constants, obstacle translations, load Constants,
     :attr:`BlockProblem.f_ext`.  The displacement rate of the last increment predicts the
-    next one.  ``on_increment`` sees each converged increment before its history is
-    committed.  Raises :class:`ConvergenceError`.
+    next one (the first iterate: what the contacts measure at the start of an increment is
+    taken from the converged state, so the predictor changes no answer).  ``on_increment``
+    sees each converged increment before its history is committed.  Raises
+    :class:`ConvergenceError`.
     """
     newton = newton or Newton()
     x = problem.x

@@ -149,7 +149,7 @@ class ContactProblem:
         self.system = BlockProblem([F for F, _ in forms], [f.u for f in self.fields],
                                    contacts=list(self.pairs.values()),
                                    jacobians=[J for _, J in forms],
-                                   obstacles=len(scene.rigids))
+                                   obstacles=len(scene.rigids), names=names)
         self.system.guards += [self._inversion_guard(f) for f in self.fields
                                if f.body.finite_strain]
 

@@ -806,6 +806,22 @@ def test_singular_jacobian_one_line(workdir):
     assert [(r["step"], r["increment"]) for r in rows] == [("0", "1"), ("0", "2")]
 
 
+def test_rigid_drift_one_line(workdir):
+    """A block on a frictionless floor whose top is held in y and z only: nothing holds it
+    along x, and its first converged increment (any sideways drift balances) stops the run
+    with exit 2 and one line naming the body and the motion; nothing is written as a
+    result."""
+    scene = workdir / "case_drift.toml"
+    scene.write_text(toml_dumps(edited(RIGID, [("contact.0.mu", 0.0),
+                                               ("step.0.bc.0.u", ["free", 0.0, -0.01])])))
+    d = workdir / "drift_out"
+    out = cli("run", scene, "--out", d, "--quiet")
+    assert_one_line_error(out, ["body 'block' can move rigidly (translation along (1, 0, 0))"
+                                " with nothing to hold it"])
+    _, rows = read_csv(d / "history.csv")
+    assert rows == []
+
+
 def test_rerun_replaces_results(workdir):
     d = workdir / "rerun_out"
     first = cli("run", workdir / "good.toml", "--out", d, "--set", "step.1.increments=3")
