@@ -32,8 +32,8 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 import dolfinx_friction
-from dolfinx_friction.io.files import file_fault
-from dolfinx_friction.io.reader import ResultsError, read_run, write_atomic
+from dolfinx_friction.io.files import file_fault, write_atomic
+from dolfinx_friction.io.reader import ResultsError, read_run
 from dolfinx_friction.scene.toml import load_scene
 
 __all__ = ["SweepError", "Point", "PointResult", "split_values", "plan", "run_sweep",

@@ -6,7 +6,7 @@ _PUBLIC = {
     "load_mesh": "gmsh", "MeshError": "gmsh", "BodyMesh": "gmsh", "MeshSet": "gmsh",
     "file_fault": "files", "ResultWriter": "writer", "FieldWriter": "writer",
     "read_run": "reader", "read_csv": "reader", "RunFiles": "reader", "ResultsError": "reader",
-    "write_atomic": "reader",
+    "write_atomic": "files", "atomic_path": "files",
 }
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_names(__name__, _PUBLIC)

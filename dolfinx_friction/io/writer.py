@@ -22,7 +22,7 @@ in this order: the rows of ``contact.csv``, the field folder
   ``.<name>.partial`` scratch folder, which is never a result;
 * each time series ``fields/<body>.xdmf`` lists the increments of ``history.csv``,
   possibly followed by that next one (its folder in place), and only complete folders;
-  a hidden ``.<body>.xdmf.tmp`` may be left and is not a result;
+  a hidden ``.<body>.<token>.partial.xdmf`` may be left and is not a result;
 * every line of the tables ends with a newline: an increment's rows go out in a
   single ``write(2)`` of whole lines (a reader may still treat a last line
   without its newline as incomplete, should the kernel ever cut such a write
@@ -56,7 +56,7 @@ from dolfinx_friction.io import xdmf_series as time_series
 from dolfinx_friction.contact.element import STATUS_NAMES
 from dolfinx_friction.errors import OutputError
 from dolfinx_friction.scene.build import ContactProblem
-from dolfinx_friction.io.reader import write_atomic as _write_atomic
+from dolfinx_friction.io.files import write_atomic
 from dolfinx_friction.scene.provenance import file_sha256
 from dolfinx_friction.scene.driver import Increment, RunSummary
 
@@ -310,7 +310,7 @@ class ResultWriter:
         }
         data.update(extra or {})
         try:
-            _write_atomic(self.dir / "summary.json", json.dumps(data, indent=2) + "\n")
+            write_atomic(self.dir / "summary.json", json.dumps(data, indent=2) + "\n")
         except OSError as exc:
             return _fault(self.dir / "summary.json", exc)
         return None
@@ -414,11 +414,11 @@ class FieldWriter:
         for name, series in grids.items():
             path = self.dir / f"{name}.xdmf"
             try:
-                _write_atomic(path, time_series.collection(name, series))
+                write_atomic(path, time_series.collection(name, series))
             except OSError as exc:
                 try:  # the series written already drop this increment, then its folder goes
                     for done in written:
-                        _write_atomic(self.dir / f"{done}.xdmf",
+                        write_atomic(self.dir / f"{done}.xdmf",
                                       time_series.collection(done, self._series[done]))
                     shutil.rmtree(folder)
                 except OSError:
