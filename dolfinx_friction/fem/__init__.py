@@ -12,7 +12,8 @@ _PUBLIC = {
     "rigid_sphere": "node_to_surface", "rigid_cylinder": "node_to_surface",
     "create_matrix": "node_to_surface", "BlockProblem": "block_problem", "Timers": "block_problem",
     "CooPattern": "pattern", "DofLayout": "numbering", "SlaveNodes": "surfaces",
-    "MasterFaces": "surfaces", "ContactInteraction": "pairing",
+    "MasterFaces": "surfaces", "ContactInteraction": "pairing", "lame": "materials",
+    "bulk_modulus": "materials", "out_of_plane": "materials",
 }
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_names(__name__, _PUBLIC)

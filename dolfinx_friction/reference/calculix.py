@@ -72,6 +72,7 @@ from typing import Any, Optional, Sequence, Union
 import numpy as np
 
 from dolfinx_friction.contact.shapes import FACE_TYPES, face_areas
+from dolfinx_friction.fem.materials import bulk_modulus, lame
 from dolfinx_friction.io.gmsh import gmsh_file, group_elements
 from dolfinx_friction.scene.model import MODELS, Body, ContactPair, Scene
 
@@ -367,8 +368,8 @@ def _material_lines(body: Body) -> list[str]:
         if not body.nu < 0.5:
             raise ValueError(f"body {body.name!r}: nu = {body.nu} >= 0.5 for the compressible "
                              "Neo-Hookean model")
-        mu = body.E / (2.0 * (1.0 + body.nu))
-        kappa = body.E / (3.0 * (1.0 - 2.0 * body.nu))
+        _, mu = lame(body.E, body.nu)
+        kappa = bulk_modulus(body.E, body.nu)
         return ["*HYPERELASTIC, NEO HOOKE", f"{_num(0.5 * mu)}, {_num(2.0 / kappa)}"]
     return ["*ELASTIC", f"{_num(body.E)}, {_num(body.nu)}"]
 

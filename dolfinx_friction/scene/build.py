@@ -18,6 +18,7 @@ from petsc4py import PETSc
 from dolfinx_friction import _compat as compat
 
 from dolfinx_friction.io import gmsh as gmsh_io
+from dolfinx_friction.fem.materials import bulk_modulus, lame, out_of_plane
 from dolfinx_friction.fem.numbering import BodyField, make_fields
 from dolfinx_friction.scene.model import Body, ContactPair, Scene
 from dolfinx_friction.fem.node_to_surface import ContactSetupError, NodeToSurface, Surface, make_law
@@ -29,15 +30,11 @@ class ModelError(ValueError):
 
 
 def _lame(body: Body, gdim: int) -> tuple[float, float]:
-    mu = body.E / (2.0 * (1.0 + body.nu))
-    lam = body.E * body.nu / ((1.0 + body.nu) * (1.0 - 2.0 * body.nu))
-    if gdim == 2 and body.plane == "stress":
-        lam = 2.0 * lam * mu / (lam + 2.0 * mu)
-    return lam, mu
+    return lame(body.E, body.nu, plane_stress=gdim == 2 and body.plane == "stress")
 
 
 def _thickness(field: BodyField) -> float:
-    return field.body.thickness if field.gdim == 2 else 1.0
+    return out_of_plane(field.body.thickness, field.gdim)
 
 
 def elastic_forms(field: BodyField) -> tuple[ufl.Form, ufl.Form]:
@@ -72,14 +69,13 @@ def strain_energy(body: Body, F3):
     Neo-Hooke (CalculiX's NEO HOOKE): ``W = C10 (I1bar - 3) + (J - 1)^2 / D1`` with
     ``I1bar = J^(-2/3) tr(F^T F)``, ``C10 = mu/2``, ``D1 = 2/kappa``, ``kappa = E/(3(1-2nu))``.
     """
-    mu = body.E / (2.0 * (1.0 + body.nu))
+    lam, mu = lame(body.E, body.nu)
     C = F3.T * F3
     if body.model == "saint-venant-kirchhoff":
-        lam = body.E * body.nu / ((1.0 + body.nu) * (1.0 - 2.0 * body.nu))
         E = 0.5 * (C - ufl.Identity(3))
         return 0.5 * lam * ufl.tr(E) ** 2 + mu * ufl.inner(E, E)
     if body.model == "neo-hookean":
-        kappa = body.E / (3.0 * (1.0 - 2.0 * body.nu))
+        kappa = bulk_modulus(body.E, body.nu)
         J = ufl.det(F3)
         return 0.5 * mu * (J ** (-2.0 / 3.0) * ufl.tr(C) - 3.0) + 0.5 * kappa * (J - 1.0) ** 2
     raise ValueError(f"body {body.name!r}: unknown model {body.model!r}")
@@ -310,7 +306,7 @@ class ContactProblem:
                 law=None if pair.law == "linear" else make_law(pair), K=pair.K,
                 sigma_inf=pair.sigma_inf, c0=pair.c0, E=body.E, mu=pair.mu,
                 stick_slope=pair.stick_slope, tangent=pair.tangent,
-                thickness=body.thickness if self.gdim == 2 else 1.0,
+                thickness=out_of_plane(body.thickness, self.gdim),
                 pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
                 obstacle_index=index, n_obstacles=len(self.scene.rigids),
                 body_names=(body.name, pair.master))

@@ -20,6 +20,8 @@ from dolfinx_friction.nls.newton import Newton
 from dolfinx_friction.scene.build import ContactProblem, ModelError
 from dolfinx_friction.nls.stepping import IncrementRecord
 from dolfinx_friction.fem.block_problem import Timers
+from dolfinx_friction.fem.loads import unit_loads
+from dolfinx_friction.fem.materials import out_of_plane
 
 
 class ConvergenceError(RuntimeError):
@@ -122,10 +124,10 @@ class Solver:
 
     def _loads(self, group: str) -> list:
         if group not in self._unit_loads:
-            from dolfinx_friction.fem import loads as bulk
             self._unit_loads[group] = [
-                (self.problem.layout.owned_slice(f.block, self.gdim), bulk.unit_loads(f, group),
-                 f) for f in self.problem.group_fields(group)]
+                (self.problem.layout.owned_slice(f.block, self.gdim),
+                 unit_loads(f, group, out_of_plane(f.body.thickness, self.gdim)), f)
+                for f in self.problem.group_fields(group)]
         return self._unit_loads[group]
 
     def validate_steps(self) -> None:
