@@ -17,7 +17,7 @@ class OutputError(OSError):
 # rather than imported: an exception of a module that was never imported cannot
 # be raised, and a bad scene is then answered without importing dolfinx.
 _INPUT_ERRORS = (("dolfinx_friction.scene.validation", "SceneError"),
-                 ("dolfinx_friction.io.gmsh", "MeshError"),
+                 ("dolfinx_friction.io.msh", "MeshError"),
                  ("dolfinx_friction.scene.build", "ModelError"),
                  ("dolfinx_friction.errors", "OutputError"))
 _DIVERGED_ERRORS = (("dolfinx_friction.scene.driver", "ConvergenceError"),)
