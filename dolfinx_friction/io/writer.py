@@ -55,6 +55,7 @@ from dolfinx_friction import _compat as compat
 from dolfinx_friction.io import xdmf_series as time_series
 from dolfinx_friction.contact.element import STATUS_NAMES
 from dolfinx_friction.errors import OutputError
+from dolfinx_friction.fem.contact_fields import SLAVE_COLUMNS, slave_rows
 from dolfinx_friction.scene.build import ContactProblem
 from dolfinx_friction.io.files import write_atomic
 from dolfinx_friction.scene.provenance import file_sha256
@@ -254,10 +255,9 @@ class ResultWriter:
         blocks = []
         for name, pair in self.problem.pairs.items():
             st = pair.state()
-            s = st.has_element
-            blocks.append(np.column_stack([self._node_ids[name][s], st.X[s], st.gap[s],
-                                           st.pressure[s], st.normal_force[s],
-                                           st.tangential_force[s], st.slip[s], st.status[s]]))
+            rows = slave_rows(st)
+            blocks.append(np.column_stack([self._node_ids[name][st.has_element],
+                                           *(rows[c] for c in SLAVE_COLUMNS)]))
         width = 3 + 3 * self.problem.gdim + 3
         local = np.concatenate(blocks) if blocks else np.zeros((0, width))
         rows = self.comm.gather(local, root=0)
@@ -336,23 +336,6 @@ class FieldWriter:
         # compiled once: a form compiler cache hit still costs ~10 ms per expression
         self.stresses = [self._stresses(f) for f in problem.fields]
 
-    def _contact_fields(self, field) -> dict[str, np.ndarray]:
-        """Nodal contact values of a body's slave nodes (owned nodes; 0 elsewhere)."""
-        n, d = len(field.X), self.problem.gdim
-        out = {"contact_pressure": np.zeros((n, 1)), "tangential_traction": np.zeros((n, d)),
-               "slip": np.zeros((n, 1)), "status": np.full((n, 1), -1.0)}
-        for contact in self.problem.scene.contacts:
-            if self.problem.group_fields(contact.slave)[0] is not field:
-                continue
-            st = self.problem.pair_of(contact).state()
-            s = st.has_element
-            nodes = st.nodes[s]
-            out["contact_pressure"][nodes, 0] = st.pressure[s]
-            out["tangential_traction"][nodes] = st.traction[s]  # acting on the slave body
-            out["slip"][nodes, 0] = st.slip[s]
-            out["status"][nodes, 0] = st.status[s]
-        return out
-
     def _stresses(self, field) -> list:
         """Cell functions and the expressions that fill them: the Cauchy stress
         (gdim x gdim) and its von Mises stress."""
@@ -381,7 +364,7 @@ class FieldWriter:
             for f, expression in stresses:
                 f.interpolate(expression)
             try:  # HDF5 writes collectively: every rank sees the failure
-                compat.write_fields(path, field, spaces, self._contact_fields(field), inc.t,
+                compat.write_fields(path, field, spaces, self.problem.contact_fields(field), inc.t,
                                     [f for f, _ in stresses])
             except (RuntimeError, OSError) as exc:
                 error = _fault(self.dir / name / path.name, exc)

@@ -18,6 +18,7 @@ from petsc4py import PETSc
 from dolfinx_friction import _compat as compat
 
 from dolfinx_friction.io import gmsh as gmsh_io
+from dolfinx_friction.fem.contact_fields import nodal_fields
 from dolfinx_friction.fem.materials import bulk_modulus, lame, out_of_plane
 from dolfinx_friction.fem.numbering import BodyField, make_fields
 from dolfinx_friction.scene.model import Body, ContactPair, Scene
@@ -316,6 +317,13 @@ class ContactProblem:
     def pair_of(self, contact: ContactPair) -> NodeToSurface:
         """The :class:`NodeToSurface` of a scene contact."""
         return self.pairs[f"{contact.slave}->{contact.master}"]
+
+    def contact_fields(self, field: BodyField) -> dict[str, np.ndarray]:
+        """The nodal contact fields of a body (:func:`~dolfinx_friction.fem.contact_fields.
+        nodal_fields`: the pairs whose slave surface is on it; owned nodes, ghosts empty)."""
+        states = [self.pair_of(c).state() for c in self.scene.contacts
+                  if self.group_fields(c.slave)[0] is field]
+        return nodal_fields(states, len(field.X), self.gdim)
 
 
 def _vectors(scene: Scene) -> list[tuple[str, tuple]]:

@@ -140,7 +140,7 @@ def _body_data(name: str, grid: pyvista.UnstructuredGrid, warp: float, amplify: 
     pressure = np.asarray(grid.point_data["contact_pressure"], dtype=float).ravel()
     s, m = facets[slave], facets[~slave]
     slaves = dict(body=name, group=f"{name} contact surface", x=x[s], pressure=pressure[s],
-                  code=status[s] + 1, X=X[s]) if len(s) else None
+                  status=status[s], X=X[s]) if len(s) else None
     others = dict(body=name, group=f"{name} boundary", x=x[m]) if len(m) else None
     return _GDIM[kind], body, slaves, others
 

@@ -59,7 +59,7 @@ def test_pressure_follows_the_deformed_face(shared_dir, follower):
         steps=(Step("squeeze", increments=4, bcs=(BC("left", (0.0, None)),), loads=(load,)),))
     result = run(scene, write=False)
     state = contact_state(result)
-    carried = state["F_N"].sum()
+    carried = state["normal_force"].sum()
     # the homogeneous state: lateral stretch a, axial b with P_11 = 0 and P_22 = -p a (or -p)
     def residual(a):
         b = brentq(lambda b: nominal_stress("neo-hookean", [a, b, 1.0], 1)

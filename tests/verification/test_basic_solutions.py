@@ -50,9 +50,9 @@ def test_uniform_pressure_penetration(shared_dir):
                     loads=(Load("top", pressure=p),)),))
     result = run(scene, write=False)
     state = contact_state(result)
-    pressure, gaps = state["pressure"], state["g_N"]
+    pressure, gaps = state["pressure"], state["gap"]
     assert len(pressure) == 9
-    assert state["F_N"].sum() == pytest.approx(p * 1.0, rel=1e-9)
+    assert state["normal_force"].sum() == pytest.approx(p * 1.0, rel=1e-9)
     np.testing.assert_allclose(pressure, pressure.mean(), rtol=1e-9)
     assert pressure.mean() == pytest.approx(p / (1 + NU * (1 + NU) * p / E), rel=1e-5)
     law_p, _ = Linear(K, sigma_inf).pressure(-gaps)
