@@ -18,7 +18,7 @@ class OutputError(OSError):
 # be raised, and a bad scene is then answered without importing dolfinx.
 _INPUT_ERRORS = (("dolfinx_friction.scene.validation", "SceneError"),
                  ("dolfinx_friction.io.msh", "MeshError"),
-                 ("dolfinx_friction.scene.build", "ModelError"),
+                 ("dolfinx_friction.scene.validation", "ModelError"),
                  ("dolfinx_friction.errors", "OutputError"))
 _DIVERGED_ERRORS = (("dolfinx_friction.scene.driver", "ConvergenceError"),)
 

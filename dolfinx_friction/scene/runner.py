@@ -64,7 +64,6 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     problem = ContactProblem(scene, comm)
     solver = Solver(problem, petsc_options=petsc_options,
                     reuse_factorisation=reuse_factorisation)
-    solver.validate_steps()  # a bad later step is an input error, found before any output
     directory = Path(out) if out is not None else (scene.output.dir or default_output_dir(scene))
     writer = None
     if write:
