@@ -15,9 +15,9 @@ from typing import Callable, Optional
 import numpy as np
 
 from dolfinx_friction.nls import stepping
-from dolfinx_friction.errors import interruption
 from dolfinx_friction.nls.newton import Newton
 from dolfinx_friction.scene.build import ContactProblem
+from dolfinx_friction.scene.control import RunControl, checkpoint
 from dolfinx_friction.nls.stepping import IncrementRecord
 from dolfinx_friction.fem.block_problem import Timers
 from dolfinx_friction.fem.loads import unit_loads
@@ -168,21 +168,26 @@ class Solver:
                            index == 0, pressures)
 
     # -------------------------------------------------------------- run
-    def run(self, on_increment: Optional[Callable[[Increment], None]] = None) -> RunSummary:
-        # SIGINT/SIGTERM (command line only): every residual evaluation is a collective
-        # checkpoint where all ranks stop together (errors.Interruption); first in the
-        # guards, so that it is reached whatever the other guards find
-        def checkpoint() -> None:
-            interruption.checkpoint(self.comm)
-        self.system.guards.insert(0, checkpoint)
-        interruption.solving = True
-        try:
-            return self._run(on_increment)
-        finally:
-            interruption.solving = False
-            self.system.guards.remove(checkpoint)
+    def run(self, on_increment: Optional[Callable[[Increment], None]] = None,
+            control: Optional[RunControl] = None) -> RunSummary:
+        """Solve every step; ``on_increment`` sees each converged increment.  ``control``
+        (:mod:`~dolfinx_friction.scene.control`) is told the increment worked on and asked
+        whether to stop at every residual evaluation.  Raises :class:`ConvergenceError`."""
+        if control is None:
+            return self._run(on_increment, None)
 
-    def _run(self, on_increment: Optional[Callable[[Increment], None]]) -> RunSummary:
+        # first in the guards: reached whatever the other guards find
+        def guard() -> str:
+            checkpoint(control, self.comm)
+            return ""
+        self.system.guards.insert(0, guard)
+        try:
+            return self._run(on_increment, control)
+        finally:
+            self.system.guards.remove(guard)
+
+    def _run(self, on_increment: Optional[Callable[[Increment], None]],
+             control: Optional[RunControl]) -> RunSummary:
         summary = self.summary
         start = time.perf_counter()
         for index, step in enumerate(self.problem.scene.steps):
@@ -195,7 +200,8 @@ class Solver:
             done = [0]  # converged increments of this step
 
             def load(tau: float, loading=loading, index=index, done=done) -> None:
-                interruption.where = (index, done[0] + 1)  # named if a signal stops the run
+                if control is not None:
+                    control.attempt(index, done[0] + 1)
                 values, self.system.f_ext = loading.at(tau)
                 self.system.prescribe(loading.rows, values)
                 for pair in self.problem.pairs.values():
