@@ -31,18 +31,16 @@ from dolfinx_friction.fem.node_to_surface import NO_ELEMENT
 if TYPE_CHECKING:
     from dolfinx_friction.fem.node_to_surface import ContactState
 
-__all__ = ["NODAL_FIELDS", "SLAVE_COLUMNS", "nodal_fields", "slave_rows"]
+__all__ = ["SLAVE_COLUMNS", "nodal_fields", "slave_rows"]
 
-#: The nodal fields, in the order the field files hold them.
-NODAL_FIELDS = ("contact_pressure", "tangential_traction", "slip", "status")
 #: The per-node values of :func:`slave_rows`, in the order of ``contact.csv``'s columns.
 SLAVE_COLUMNS = ("X", "gap", "pressure", "normal_force", "tangential_force", "slip", "status")
 
 
 def nodal_fields(states: Sequence["ContactState"], n_nodes: int, gdim: int
                  ) -> dict[str, np.ndarray]:
-    """The :data:`NODAL_FIELDS` of a body with ``n_nodes`` local nodes, from the states of
-    the pairs whose slave surface lies on it (their ``nodes`` index the body's nodes)."""
+    """The nodal fields of a body with ``n_nodes`` local nodes, from the states of the
+    pairs whose slave surface lies on it (their ``nodes`` index the body's nodes)."""
     out = {"contact_pressure": np.zeros((n_nodes, 1)),
            "tangential_traction": np.zeros((n_nodes, gdim)),
            "slip": np.zeros((n_nodes, 1)), "status": np.full((n_nodes, 1), float(NO_ELEMENT))}
