@@ -37,7 +37,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from tests import meshes
+from dolfinx_friction.reference import meshes
 
 pytestmark = pytest.mark.skipif(
     MPI.COMM_WORLD.size > 1,
@@ -217,7 +217,7 @@ BASES = {"good": GOOD, "rigid": RIGID, "planar": PLANAR}
 
 
 def _block_with_edge(path: Path) -> Path:
-    """tests.meshes.block_3d (2x2x1 hexahedra) plus the edge group ``edge_x0y0``."""
+    """reference.meshes.block_3d (2x2x1 hexahedra) plus the edge group ``edge_x0y0``."""
     import gmsh
 
     def build():
@@ -260,7 +260,7 @@ def _without_names(path: Path) -> Path:
 
 
 def _spanning_group(path: Path) -> Path:
-    """tests.meshes.two_boxes (coarse) plus ``both_bottoms``: a facet group on both bodies."""
+    """reference.meshes.two_boxes (coarse) plus ``both_bottoms``: a facet group on both bodies."""
     def build():
         f = meshes._box(0, 0, 0, 1, 1, 0.5)
         b = meshes._box(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)

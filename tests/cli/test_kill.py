@@ -45,7 +45,7 @@ import pytest
 from mpi4py import MPI
 
 from dolfinx_friction import _compat as compat
-from tests import meshes
+from dolfinx_friction.reference import meshes
 from tests.cli.test_outputs import series_grids
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,

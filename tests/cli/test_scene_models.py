@@ -15,7 +15,7 @@ from dolfinx_friction.scene.runner import run
 from dolfinx_friction.scene.model import BC, Body, ContactPair, Load, Rigid, Scene, Step
 from dolfinx_friction.reference.compare import contact_state
 from dolfinx_friction.scene.toml import SceneError, parse_scene
-from tests import meshes
+from dolfinx_friction.reference import meshes
 from tests.cli.test_scene import edited, put
 from tests.verification.test_finite_strain import E, NU, nominal_stress
 

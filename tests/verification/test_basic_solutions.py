@@ -8,7 +8,7 @@ from dolfinx_friction.scene.runner import run
 from dolfinx_friction.contact.laws import Linear
 from dolfinx_friction.scene.model import BC, Body, ContactPair, Load, Rigid, Scene, Step
 from dolfinx_friction.reference.compare import contact_state
-from tests import meshes
+from dolfinx_friction.reference import meshes
 
 E, NU = 1000.0, 0.3
 

@@ -21,7 +21,7 @@ from dolfinx_friction.scene.runner import run
 from dolfinx_friction.scene.driver import ConvergenceError
 from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Rigid, Scene, Step
 from dolfinx_friction.reference.compare import contact_state
-from tests import meshes
+from dolfinx_friction.reference import meshes
 
 E, NU = 1000.0, 0.3
 MU, LAM = E / (2 * (1 + NU)), E * NU / ((1 + NU) * (1 - 2 * NU))

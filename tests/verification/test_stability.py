@@ -39,7 +39,7 @@ from dolfinx_friction.scene.runner import PENETRATION_WARNING, run
 from dolfinx_friction.scene.model import (BC, Body, ContactPair, Output, Rigid, RigidMotion, Scene,
                                     Step)
 from dolfinx_friction.scene.driver import ConvergenceError
-from tests import meshes
+from dolfinx_friction.reference import meshes
 
 DEMOS = Path(__file__).resolve().parents[2] / "demos"
 
