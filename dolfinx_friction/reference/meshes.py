@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Optional
 
 import gmsh
 from mpi4py import MPI
@@ -28,7 +29,9 @@ def _boundary(dim: int, entity: int, axis: int, value: float) -> list[int]:
     return out
 
 
-def _write(build, path: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+def write_model(build, path: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Run ``build()`` on a fresh Gmsh model on rank 0 and write the mesh to ``path``;
+    every rank of ``comm`` returns ``path`` once it is written."""
     if comm.rank == 0:
         gmsh.initialize()
         gmsh.option.setNumber("General.Terminal", 0)
@@ -75,7 +78,7 @@ def block_3d(path: Path, n: tuple[int, int, int] = (4, 4, 2), tets: bool = False
         _group(2, _boundary(3, box, 2, 0.5), "top")
         _group(2, _boundary(3, box, 0, 0.0), "side_x0")
         _group(2, _boundary(3, box, 1, 0.0), "side_y0")
-    return _write(build, path)
+    return write_model(build, path)
 
 
 def two_boxes(path: Path, n_block: tuple[int, int, int] = (4, 4, 2),
@@ -95,7 +98,7 @@ def two_boxes(path: Path, n_block: tuple[int, int, int] = (4, 4, 2),
         _group(2, _boundary(3, f, 2, 0.5), "foundation_top")
         _group(2, _boundary(3, b, 2, 0.5), "block_bottom")
         _group(2, _boundary(3, b, 2, 0.75), "block_top")
-    return _write(build, path)
+    return write_model(build, path)
 
 
 def rectangle_2d(path: Path, n: tuple[int, int] = (8, 2), quads: bool = True,
@@ -119,7 +122,7 @@ def rectangle_2d(path: Path, n: tuple[int, int] = (8, 2), quads: bool = True,
         _group(1, _boundary(2, s, 1, 0.25), "top")
         _group(1, _boundary(2, s, 0, 0.0), "left")
         _group(1, _boundary(2, s, 0, 1.0), "right")
-    return _write(build, path)
+    return write_model(build, path)
 
 
 def blocks_on_foundation(path: Path, n_foundation: int = 5, n_block: int = 4,
@@ -131,46 +134,38 @@ def blocks_on_foundation(path: Path, n_foundation: int = 5, n_block: int = 4,
     ``foundation_top``, ``foundation_bottom``.  The CalculiX comparisons' mesh
     (``tests/verification/test_calculix.py``).
     """
-    if comm.rank == 0:
-        gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
-        try:
-            gmsh.model.add("blocks")
-            occ = gmsh.model.occ
-            f = occ.addBox(0, 0, 0, 1, 1, 0.5)
-            b = occ.addBox(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
-            occ.synchronize()
-            for vol, n in ((f, n_foundation), (b, n_block)):
-                surfaces = gmsh.model.getBoundary([(3, vol)], combined=False, oriented=False)
-                for _, curve in gmsh.model.getBoundary(surfaces, combined=False, oriented=False):
-                    gmsh.model.mesh.setTransfiniteCurve(abs(curve), n + 1)
-                for _, s in surfaces:
-                    gmsh.model.mesh.setTransfiniteSurface(s)
-                    if not tets:
-                        gmsh.model.mesh.setRecombine(2, s)
-                gmsh.model.mesh.setTransfiniteVolume(vol)
+    def build():
+        occ = gmsh.model.occ
+        f = occ.addBox(0, 0, 0, 1, 1, 0.5)
+        b = occ.addBox(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
+        occ.synchronize()
+        for vol, n in ((f, n_foundation), (b, n_block)):
+            surfaces = gmsh.model.getBoundary([(3, vol)], combined=False, oriented=False)
+            for _, curve in gmsh.model.getBoundary(surfaces, combined=False, oriented=False):
+                gmsh.model.mesh.setTransfiniteCurve(abs(curve), n + 1)
+            for _, s in surfaces:
+                gmsh.model.mesh.setTransfiniteSurface(s)
+                if not tets:
+                    gmsh.model.mesh.setRecombine(2, s)
+            gmsh.model.mesh.setTransfiniteVolume(vol)
 
-            def face(vol, z):
-                return [t for _, t in gmsh.model.getBoundary([(3, vol)], oriented=False)
-                        if abs(occ.getCenterOfMass(2, t)[2] - z) < 1e-9]
+        def face(vol, z):
+            return [t for _, t in gmsh.model.getBoundary([(3, vol)], oriented=False)
+                    if abs(occ.getCenterOfMass(2, t)[2] - z) < 1e-9]
 
-            for dim, tags, name in ((3, [f], "foundation"), (3, [b], "block"),
-                                    (2, face(f, 0.0), "foundation_bottom"),
-                                    (2, face(f, 0.5), "foundation_top"),
-                                    (2, face(b, 0.5), "block_bottom"),
-                                    (2, face(b, 0.75), "block_top")):
-                gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
-            gmsh.model.mesh.generate(3)
-            gmsh.write(str(path))
-        finally:
-            gmsh.finalize()
-    comm.barrier()
-    return path
+        for dim, tags, name in ((3, [f], "foundation"), (3, [b], "block"),
+                                (2, face(f, 0.0), "foundation_bottom"),
+                                (2, face(f, 0.5), "foundation_top"),
+                                (2, face(b, 0.5), "block_bottom"),
+                                (2, face(b, 0.75), "block_top")):
+            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
+        gmsh.model.mesh.generate(3)
+    return write_model(build, path, comm)
 
 
 def ironing(path: Path, length: float = 10.0, height: float = 5.0, radius: float = 2.0,
-                 x0: float = 3.0, nx: int = 40, ny: int = 6, bias: float = 0.75,
-                 n_arc: int = 32, thickness=None, dim: int = 3):
+            x0: float = 3.0, nx: int = 40, ny: int = 6, bias: float = 0.75, n_arc: int = 32,
+            thickness: Optional[float] = None, dim: int = 3) -> Path:
     """The plane-strain ironing geometry, structured: one layer of hexahedra (``dim = 3``)
     or its quadrilaterals (``dim = 2``: the same nodes as the hexahedra's face z = 0).
 

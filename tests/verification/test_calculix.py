@@ -47,7 +47,7 @@ import pytest
 from mpi4py import MPI
 
 from dolfinx_friction.reference import calculix
-from dolfinx_friction.reference.meshes import blocks_on_foundation
+from dolfinx_friction.reference.meshes import blocks_on_foundation, write_model
 from dolfinx_friction.scene.model import BC, Body, Load, Rigid, Scene, Step
 
 comm = MPI.COMM_WORLD
@@ -66,35 +66,28 @@ TOL = 0.01  # the issue's 1 %: |R - R_ccx| <= TOL |R_ccx| per group and incremen
 
 def _cube_mesh(path: Path, n: int = 3, tets: bool = False) -> Path:
     """Unit cube, body ``cube``, facet groups ``x0``, ``x1``, ``y0``, ``y1``, ``z0``, ``z1``."""
-    if ROOT:
-        import gmsh
-        gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
-        try:
-            gmsh.model.add("cube")
-            box = gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
-            gmsh.model.occ.synchronize()
-            if tets:  # unstructured: every face number of C3D4 occurs on the boundary
-                gmsh.option.setNumber("Mesh.MeshSizeMax", 1.0 / n)
-            else:
-                for _, c in gmsh.model.getEntities(1):
-                    gmsh.model.mesh.setTransfiniteCurve(c, n + 1)
-                for _, s in gmsh.model.getEntities(2):
-                    gmsh.model.mesh.setTransfiniteSurface(s)
-                    gmsh.model.mesh.setRecombine(2, s)
-                gmsh.model.mesh.setTransfiniteVolume(box)
-            gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [box]), "cube")
+    import gmsh
+
+    def build():
+        box = gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        if tets:  # unstructured: every face number of C3D4 occurs on the boundary
+            gmsh.option.setNumber("Mesh.MeshSizeMax", 1.0 / n)
+        else:
+            for _, c in gmsh.model.getEntities(1):
+                gmsh.model.mesh.setTransfiniteCurve(c, n + 1)
             for _, s in gmsh.model.getEntities(2):
-                c = gmsh.model.occ.getCenterOfMass(2, s)
-                axis = int(np.argmin([min(abs(v), abs(v - 1)) for v in c]))
-                name = "xyz"[axis] + ("0" if c[axis] < 0.5 else "1")
-                gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [s]), name)
-            gmsh.model.mesh.generate(3)
-            gmsh.write(str(path))
-        finally:
-            gmsh.finalize()
-    comm.barrier()
-    return path
+                gmsh.model.mesh.setTransfiniteSurface(s)
+                gmsh.model.mesh.setRecombine(2, s)
+            gmsh.model.mesh.setTransfiniteVolume(box)
+        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [box]), "cube")
+        for _, s in gmsh.model.getEntities(2):
+            c = gmsh.model.occ.getCenterOfMass(2, s)
+            axis = int(np.argmin([min(abs(v), abs(v - 1)) for v in c]))
+            name = "xyz"[axis] + ("0" if c[axis] < 0.5 else "1")
+            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [s]), name)
+        gmsh.model.mesh.generate(3)
+    return write_model(build, path, comm)
 
 
 # --------------------------------------------------------------------------- helpers
