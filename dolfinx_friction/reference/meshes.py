@@ -15,12 +15,13 @@ import gmsh
 from mpi4py import MPI
 
 
-def _group(dim: int, tags: list[int], name: str) -> None:
+def group(dim: int, tags: list[int], name: str) -> None:
+    """Name the entities ``tags`` of dimension ``dim`` a physical group ``name``."""
     tag = gmsh.model.addPhysicalGroup(dim, tags)
     gmsh.model.setPhysicalName(dim, tag, name)
 
 
-def _boundary(dim: int, entity: int, axis: int, value: float) -> list[int]:
+def boundary(dim: int, entity: int, axis: int, value: float) -> list[int]:
     """Boundary entities of ``entity`` whose centre has coordinate ``axis`` equal to ``value``."""
     out = []
     for d, t in gmsh.model.getBoundary([(dim, entity)], oriented=False):
@@ -45,16 +46,17 @@ def write_model(build, path: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
     return path
 
 
-def _box(x0, y0, z0, dx, dy, dz) -> int:
-    box = gmsh.model.occ.addBox(x0, y0, z0, dx, dy, dz)
+def box(x0: float, y0: float, z0: float, dx: float, dy: float, dz: float) -> int:
+    """An OpenCASCADE box (its volume tag), synchronised."""
+    tag = gmsh.model.occ.addBox(x0, y0, z0, dx, dy, dz)
     gmsh.model.occ.synchronize()
-    return box
+    return tag
 
 
-def _mesh_boxes(boxes: list[tuple[int, tuple[int, int, int]]], tets: bool = False) -> None:
+def mesh_boxes(boxes: list[tuple[int, tuple[int, int, int]]], tets: bool = False) -> None:
     """Structured hex (or tet) meshes of boxes, ``n`` = segments along x, y, z."""
-    for box, n in boxes:
-        for _, surf in gmsh.model.getBoundary([(3, box)], oriented=False):
+    for volume, n in boxes:
+        for _, surf in gmsh.model.getBoundary([(3, volume)], oriented=False):
             for _, curve in gmsh.model.getBoundary([(2, surf)], oriented=False):
                 a, b = gmsh.model.getBoundary([(1, curve)], oriented=False)
                 pa = gmsh.model.getValue(0, a[1], [])
@@ -64,20 +66,21 @@ def _mesh_boxes(boxes: list[tuple[int, tuple[int, int, int]]], tets: bool = Fals
             gmsh.model.mesh.setTransfiniteSurface(surf)
             if not tets:
                 gmsh.model.mesh.setRecombine(2, surf)
-        gmsh.model.mesh.setTransfiniteVolume(box)
+        gmsh.model.mesh.setTransfiniteVolume(volume)
     gmsh.model.mesh.generate(3)
 
 
 def block_3d(path: Path, n: tuple[int, int, int] = (4, 4, 2), tets: bool = False) -> Path:
-    """Box [0,1]x[0,1]x[0,0.5]: body ``block``, facets ``bottom`` (z=0), ``top``, ``side_x0``, ``side_y0``."""
+    """Box [0,1]x[0,1]x[0,0.5]: body ``block``, facets ``bottom`` (z=0), ``top``,
+    ``side_x0``, ``side_y0``."""
     def build():
-        box = _box(0, 0, 0, 1, 1, 0.5)
-        _mesh_boxes([(box, n)], tets)
-        _group(3, [box], "block")
-        _group(2, _boundary(3, box, 2, 0.0), "bottom")
-        _group(2, _boundary(3, box, 2, 0.5), "top")
-        _group(2, _boundary(3, box, 0, 0.0), "side_x0")
-        _group(2, _boundary(3, box, 1, 0.0), "side_y0")
+        b = box(0, 0, 0, 1, 1, 0.5)
+        mesh_boxes([(b, n)], tets)
+        group(3, [b], "block")
+        group(2, boundary(3, b, 2, 0.0), "bottom")
+        group(2, boundary(3, b, 2, 0.5), "top")
+        group(2, boundary(3, b, 0, 0.0), "side_x0")
+        group(2, boundary(3, b, 1, 0.0), "side_y0")
     return write_model(build, path)
 
 
@@ -89,15 +92,15 @@ def two_boxes(path: Path, n_block: tuple[int, int, int] = (4, 4, 2),
     ``foundation_top``, ``foundation_bottom``.
     """
     def build():
-        f = _box(0, 0, 0, 1, 1, 0.5)
-        b = _box(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
-        _mesh_boxes([(f, n_foundation), (b, n_block)])
-        _group(3, [f], "foundation")
-        _group(3, [b], "block")
-        _group(2, _boundary(3, f, 2, 0.0), "foundation_bottom")
-        _group(2, _boundary(3, f, 2, 0.5), "foundation_top")
-        _group(2, _boundary(3, b, 2, 0.5), "block_bottom")
-        _group(2, _boundary(3, b, 2, 0.75), "block_top")
+        f = box(0, 0, 0, 1, 1, 0.5)
+        b = box(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
+        mesh_boxes([(f, n_foundation), (b, n_block)])
+        group(3, [f], "foundation")
+        group(3, [b], "block")
+        group(2, boundary(3, f, 2, 0.0), "foundation_bottom")
+        group(2, boundary(3, f, 2, 0.5), "foundation_top")
+        group(2, boundary(3, b, 2, 0.5), "block_bottom")
+        group(2, boundary(3, b, 2, 0.75), "block_top")
     return write_model(build, path)
 
 
@@ -117,11 +120,11 @@ def rectangle_2d(path: Path, n: tuple[int, int] = (8, 2), quads: bool = True,
             gmsh.model.mesh.setRecombine(2, s)
         gmsh.model.mesh.generate(2)
         gmsh.model.mesh.setOrder(order)
-        _group(2, [s], "block")
-        _group(1, _boundary(2, s, 1, 0.0), "bottom")
-        _group(1, _boundary(2, s, 1, 0.25), "top")
-        _group(1, _boundary(2, s, 0, 0.0), "left")
-        _group(1, _boundary(2, s, 0, 1.0), "right")
+        group(2, [s], "block")
+        group(1, boundary(2, s, 1, 0.0), "bottom")
+        group(1, boundary(2, s, 1, 0.25), "top")
+        group(1, boundary(2, s, 0, 0.0), "left")
+        group(1, boundary(2, s, 0, 1.0), "right")
     return write_model(build, path)
 
 
