@@ -20,6 +20,7 @@ from dolfinx_friction.cli.signals import Interruption
 from dolfinx_friction.errors import Interrupted, OutputError
 from dolfinx_friction.io.files import file_fault
 from dolfinx_friction.scene.toml import SceneError, default_output_dir, load_scene
+from dolfinx_friction.scene.validation import check_mesh_file
 
 __all__ = ["COMMANDS", "UsageError"]
 
@@ -40,10 +41,7 @@ def _scene(args: argparse.Namespace):
     the output directory is to be made."""
     _scene_file(args.scene)
     scene = load_scene(args.scene, args.overrides)
-    mesh = Path(scene.mesh)
-    reason = file_fault(mesh)
-    if reason is not None:
-        raise SceneError(f"mesh.file: {mesh}: {reason}", key="mesh.file", source=str(args.scene))
+    check_mesh_file(scene, args.scene)
     if args.command == "run":
         directory = Path(args.out) if args.out is not None else default_output_dir(scene)
         for path in (directory, *directory.absolute().parents):

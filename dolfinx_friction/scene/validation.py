@@ -7,9 +7,10 @@ checks the whole (unique names, references between sections, one vector length).
 scene reader (:mod:`dolfinx_friction.scene.toml`) builds the same dataclasses, so a scene
 file and a script are held to one set of rules with one set of messages.
 
-What needs the mesh is checked when the scene is put on it
-(:class:`~dolfinx_friction.scene.build.DiscreteScene`, for ``run`` and ``check`` alike),
-by :func:`check_groups`, :func:`check_solvable`, :func:`check_held` and
+:func:`check_mesh_file` tells whether the mesh file can be read at all (the command line
+and ``sweep``, before dolfinx is imported).  What needs the mesh is checked when the scene
+is put on it (:class:`~dolfinx_friction.scene.build.DiscreteScene`, for ``run`` and
+``check`` alike), by :func:`check_groups`, :func:`check_solvable`, :func:`check_held` and
 :func:`check_bcs`; they raise :class:`ModelError`, naming the key as above.
 
 Every problem raises :class:`SceneError` with one line naming the field by its scene-file key
@@ -38,6 +39,8 @@ from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn, Optional, Union
+
+from dolfinx_friction.io.files import file_fault
 
 
 class SceneError(ValueError):
@@ -538,6 +541,17 @@ def check_scene(scene: Any, key: str) -> None:
 # ``group_bodies``, ``group_touches``, ``bodies[name].interior_facets(group)``), ``fields``
 # the bodies' :class:`~dolfinx_friction.fem.numbering.BodyField` (``body``, ``n_owned``,
 # ``owned_group_nodes(group)``): used here by their attributes only.
+
+def check_mesh_file(scene: Any, source: Union[str, Path, None] = None) -> None:
+    """The scene's mesh file is there and is a regular file (what can be told before the
+    mesh is read); ``source`` names the scene file in the message."""
+    if not isinstance(scene.mesh, (str, os.PathLike)):
+        return  # a live gmsh model
+    reason = file_fault(scene.mesh)
+    if reason is not None:
+        raise SceneError(f"mesh.file: {scene.mesh}: {reason}", key="mesh.file",
+                         source=None if source is None else str(source))
+
 
 #: Largest Young's modulus, penalty K or stick slope a scene may give: forces of order
 #: E L^2 are squared in residual norms (sqrt of the largest double: 1.3e154); 1e150 leaves
