@@ -5,7 +5,7 @@
   because ``demos/hertz_sphere.py`` did not exist when ``bench_hertz.py`` was written;
   that demo's ``build_mesh`` (same geometry and group names) is now used, this one only
   if the demo is missing.
-* :func:`two_boxes` -- ``tests/meshes.two_boxes`` (block on a foundation, structured
+* :func:`two_boxes` -- ``reference.meshes.two_boxes`` (block on a foundation, structured
   hexahedra) at a resolution given by one integer, with a foundation mesh chosen so that
   no slave node lies on an edge of a master face (there the choice of master face is
   arbitrary, and CalculiX with tight controls can stall switching faces).
@@ -92,7 +92,7 @@ def two_boxes_dofs(n: int) -> int:
 
 def two_boxes(path: Path, n: int) -> Path:
     """Block 2n x 2n x n hexahedra on a foundation m x m x n (:func:`foundation_divisions`)."""
-    from tests.meshes import two_boxes as build
+    from dolfinx_friction.reference.meshes import two_boxes as build
     m = foundation_divisions(n)
     return build(path, (2 * n, 2 * n, n), (m, m, n))
 

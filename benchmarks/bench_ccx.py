@@ -26,9 +26,9 @@ where the kind has one, its plane-strain 2D twin in ours:
 * ``hertz`` -- the Hertz cylinder of ``demos/hertz_cylinder.py``, one layer of hexahedra
   (``_meshes.one_layer``), frictionless, h = 0.08, 0.05, 0.04, 0.026 (11k, 23k, 33k, 71k
   dofs), 2D twin;
-* ``ironing`` -- the ironing of ``test_calculix_nlgeom.py`` (``ironing_mesh``, one layer),
+* ``ironing`` -- the ironing of ``reference.cases`` (``reference.meshes.ironing``, one layer),
   linear bodies, mu = 0.3, nx x ny = 100 x 20, 120 x 24, 150 x 30, 216 x 44 (15k, 22k, 34k,
-  71k dofs), 2D twin (``ironing_mesh(dim=2)``);
+  71k dofs), 2D twin (``ironing(dim=2)``);
 * ``small3d`` -- the block on a foundation at n = 2 (801 dofs), slid in 10 increments;
 * ``block3d`` -- the same at n = 6, 8 (16k, 35k dofs), slid in 2 increments;
   small3d and block3d with mu = 0.3 and frictionless.
@@ -170,18 +170,18 @@ def hertz_scene(h: float, three_d: bool):
 
 
 def ironing_scene(size: tuple, three_d: bool):
-    """The plane-strain ironing of tests/verification/test_calculix_nlgeom.py, linear
+    """The plane-strain ironing of reference.cases (the finite-strain comparison's), linear
     bodies, mu = 0.3, pressed in 10 and dragged in 40 increments: one layer of hexahedra
     (thickness length / nx) or the same quadrilaterals in 2D.  The block's rows graded
     alike at every size: ``bias ** ny = 0.9 ** 24`` (``ny <= 6``: bias 0.75)."""
-    from tests.verification import test_calculix_nlgeom as T
+    from dolfinx_friction.reference import cases, meshes
     length, nx, ny, n_arc = size
     dim = 3 if three_d else 2
     path = B.work_dir("ccx") / f"ironing_{length:g}_{nx}x{ny}_{n_arc}_{dim}d.msh"
     if not path.exists():
-        T.ironing_mesh(path, length=length, nx=nx, ny=ny, n_arc=n_arc, dim=dim,
+        meshes.ironing(path, length=length, nx=nx, ny=ny, n_arc=n_arc, dim=dim,
                        bias=0.9 ** (24 / ny) if ny > 6 else 0.75)
-    return T.ironing_scene(path, "linear", press_increments=10, drag_increments=40, dim=dim)
+    return cases.ironing_scene(path, "linear", press_increments=10, drag_increments=40, dim=dim)
 
 
 class Case(NamedTuple):
@@ -358,7 +358,7 @@ def kinds_report(rows, machine, load_end) -> str:
         "contact-zone size h), extruded by one layer of hexahedra (`_meshes.one_layer`, "
         f"thickness {LAYER}, u_z = 0 on both faces), K = 1e7, frictionless, pressed "
         f"{HERTZ_PRESS} in {HERTZ_INCREMENTS} increments.",
-        "* ironing: `test_calculix_nlgeom.ironing_mesh` (block L x 5 of nx x ny cells, L = 20, "
+        "* ironing: `reference.meshes.ironing` (block L x 5 of nx x ny cells, L = 20, "
         "--quick 10; one hexahedron layer of thickness L / nx, u_z = 0 on both faces), linear "
         "bodies, mu = 0.3, press 10 + drag 40 increments.",
         "* '2D' (hertz, ironing) = the same quadrilaterals in plane strain, ours only (the deck "

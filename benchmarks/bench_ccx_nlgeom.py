@@ -34,8 +34,7 @@ import time
 import _bench as B  # noqa: I001
 import numpy as np
 
-from tests.verification import test_calculix as TL
-from tests.verification import test_calculix_nlgeom as T
+from dolfinx_friction.reference import cases as ccx_cases, meshes
 
 
 def _ccx_solves(log: str) -> int:
@@ -44,13 +43,13 @@ def _ccx_solves(log: str) -> int:
 
 def cases(quick: bool):
     work = B.work_dir("ccx_nlgeom")
-    out = [("press + shear", lambda m="neo-hookean": T.press_shear_scene(
-                TL._blocks_mesh(work / "blocks.msh"), m), "press"),
-           ("ironing (test)", lambda m="neo-hookean": T.ironing_scene(
-                T.ironing_mesh(work / "ironing_test.msh"), m), "ironing")]
+    out = [("press + shear", lambda m="neo-hookean": ccx_cases.press_shear_scene(
+                meshes.blocks_on_foundation(work / "blocks.msh"), m), "press"),
+           ("ironing (test)", lambda m="neo-hookean": ccx_cases.ironing_scene(
+                meshes.ironing(work / "ironing_test.msh"), m), "ironing")]
     if not quick:
-        out.append(("ironing (full)", lambda m="neo-hookean": T.ironing_scene(
-            T.ironing_mesh(work / "ironing_full.msh", length=20.0, nx=120, ny=24, bias=0.9,
+        out.append(("ironing (full)", lambda m="neo-hookean": ccx_cases.ironing_scene(
+            meshes.ironing(work / "ironing_full.msh", length=20.0, nx=120, ny=24, bias=0.9,
                            n_arc=40), m), "ironing"))
     return out
 
@@ -58,7 +57,7 @@ def cases(quick: bool):
 def figures(kind: str, reactions: dict) -> dict:
     """reactions: {(step, inc): {group: vec}} -> the case's summary forces."""
     if kind == "ironing":
-        return T.ironing_figures({k: r["die_top"] for k, r in reactions.items()})
+        return ccx_cases.ironing_figures({k: r["die_top"] for k, r in reactions.items()})
     press = max(k for k in reactions if k[0] == 0)
     last = max(reactions)
     return {"press": abs(float(reactions[press]["block_top"][2])),

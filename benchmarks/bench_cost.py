@@ -4,7 +4,7 @@
     python benchmarks/bench_cost.py --quick     # two small sizes (< 2 min)
     python benchmarks/bench_cost.py --sizes 6,8 --iterative-sizes 20 --no-results
 
-Scene (``benchmarks/_meshes.two_boxes``, i.e. ``tests/meshes.two_boxes`` at resolution n):
+Scene (``benchmarks/_meshes.two_boxes``, i.e. ``reference.meshes.two_boxes`` at resolution n):
 an elastic block (2n x 2n x n hexahedra, Q4 slave faces) on a foundation (m x m x n, m ~ 3n,
 master), E = 1000, nu = 0.3 for both, linear law with CalculiX's K = 50 E and
 lambda = E/2 (``"calculix"``), mu = 0.3; step 1 presses the block top down by 0.005
@@ -225,7 +225,7 @@ def _match(rows, n, contact, solver, reuse=False):
 def report(rows, machine, load_end, quick, figure) -> str:
     out = [
         "`benchmarks/bench_cost.py`" + (" --quick" if quick else "") + ": block on a "
-        "foundation (`tests/meshes.two_boxes` via `benchmarks/_meshes.py`, hexahedra, Q4 "
+        "foundation (`reference.meshes.two_boxes` via `benchmarks/_meshes.py`, hexahedra, Q4 "
         f"faces), E = {E:g}, nu = {NU}, K = 50 E, mu = {MU}; press {PRESS} (1 increment), "
         f"slide {SLIDE} (2 increments, full slip); serial; each configuration in its own "
         "process.",

@@ -130,7 +130,7 @@ def main(argv=None) -> None:
     closed = st["status"] != 0
     x = st["X"][closed, 0]
     status = st["status"][closed]
-    qx = st["F_T"][closed, 0] / st["area"][closed]
+    qx = st["tangential_force"][closed, 0] / st["area"][closed]
     order = np.argsort(x)
     x, status, qx, p = x[order], status[order], qx[order], st["pressure"][closed][order]
     # stick-zone edges: midway between the outermost stick node and its slipping neighbour
@@ -149,8 +149,8 @@ def main(argv=None) -> None:
           f"{c_ref:.4f} ({C.relerr(c_num, c_ref)}; node spacing {spacing:.4f} = "
           f"{100 * spacing / c_ref:.1f} % of c)")
     slip = status == 2
-    ratio = (np.linalg.norm(st["F_T"][closed][order][slip], axis=1)
-             / (MU * st["F_N"][closed][order][slip]))
+    ratio = (np.linalg.norm(st["tangential_force"][closed][order][slip], axis=1)
+             / (MU * st["normal_force"][closed][order][slip]))
     print(f"slip nodes: |F_T|/(mu F_N) in [{ratio.min():.6f}, {ratio.max():.6f}] (Coulomb: 1)")
     inside = np.abs(x) < 0.7 * c_ref
     dev = qx[inside] - cattaneo_mindlin_traction(x[inside], a, c_ref, MU, p0)

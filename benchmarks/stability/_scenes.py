@@ -245,9 +245,9 @@ def cached_mesh(kind: str, builder, **params) -> Path:
     key = hashlib.sha1(json.dumps([kind, params], sort_keys=True).encode()).hexdigest()[:12]
     path = WORK / f"{kind}_{key}.msh"
     if not path.exists():
-        tmp = WORK / f".{kind}_{key}.{os.getpid()}.msh"
-        builder(tmp, **params)
-        os.replace(tmp, path)
+        from dolfinx_friction.io.files import atomic_path
+        with atomic_path(path) as tmp:
+            builder(tmp, **params)
     return path
 
 

@@ -1,135 +1,108 @@
-"""``dolfinx-friction sweep | plot | render``: studies of a scene and pictures of written
-results.  Each runs in one process (``sweep`` starts its own runs): under ``mpirun`` with
-more than one rank they refuse with one line.  Bad input: one line on stderr, exit 2.
+"""The bodies of the commands of :mod:`~dolfinx_friction.cli.frontend`.
+
+Each takes the parsed arguments and the command's
+:class:`~dolfinx_friction.cli.signals.Interruption` and returns the exit status; what goes
+wrong goes up as an exception, which the front end turns into one line and a status
+(:mod:`~dolfinx_friction.cli.exits`).  ``run`` and ``check`` read and validate the scene
+before dolfinx is imported (a bad scene is answered at once); ``sweep``, ``plot`` and
+``render`` run in one process (``sweep`` starts its own runs) and refuse ``mpirun``.
 """
 from __future__ import annotations
 
 import argparse
-import math
 import os
-import signal
-import sys
-import threading
 from pathlib import Path
+from typing import Callable
 
-from dolfinx_friction.errors import (EXIT_DIVERGED, EXIT_INPUT, EXIT_INTERNAL, EXIT_SIGNAL,
-                                     Interrupted)
+from dolfinx_friction.cli import mpi
+from dolfinx_friction.cli.exits import EXIT_DIVERGED, EXIT_INPUT, EXIT_OK, error, signal_status
+from dolfinx_friction.cli.signals import Interruption
+from dolfinx_friction.errors import Interrupted, OutputError
+from dolfinx_friction.io.files import file_fault
+from dolfinx_friction.scene.toml import SceneError, default_output_dir, load_scene
+from dolfinx_friction.scene.validation import check_mesh_file
 
-__all__ = ["COMMANDS", "add_parsers", "main"]
-
-COMMANDS = ("sweep", "plot", "render")
-#: Environment variables that MPI launchers set to the number of ranks.
-_MPI_SIZES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MPI_LOCALNRANKS", "MV2_COMM_WORLD_SIZE")
+__all__ = ["COMMANDS", "UsageError"]
 
 
-class _UsageError(ValueError):
+class UsageError(ValueError):
     """A command used where or how it cannot work (one line, exit 2)."""
 
 
-def _at_least_one(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, not {value}")
-    return value
-
-
-def _scale(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
-    return value
-
-
-def add_parsers(sub) -> None:
-    """The three subcommands, on the subparsers of ``dolfinx-friction``."""
-    hidden = dict(action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
-    sweep = sub.add_parser(
-        "sweep", help="run a scene at every point of a cartesian product of --set values",
-        description="Run SCENE at every point of the cartesian product of the --set values, "
-                    "each point in DIR/<key=value,...>/, up to -j at a time, and write "
-                    "DIR/sweep.csv (one row per point: the values, converged or not, "
-                    "increments, Newton iterations, wall time, final reactions, the reason "
-                    "of a failure).  Exit 0 when every point converged, 3 otherwise.")
-    sweep.add_argument("scene", type=Path)
-    sweep.add_argument("--set", dest="sweeps", action="append", default=[],
-                       metavar="KEY=V1,V2,...",
-                       help="values of one scene key (dotted path, as run --set); the list is "
-                            "split at commas outside brackets, braces and quotes: "
-                            "step.1.bc.0.u=[0,0,-1],[0,0,-2] is two values")
-    sweep.add_argument("-j", "--jobs", type=_at_least_one, default=1, metavar="N",
-                       help="points run at the same time (default 1)")
-    sweep.add_argument("--out", type=Path, metavar="DIR",
-                       help="sweep folder (default: <scene stem>_sweep next to the scene)")
-    sweep.add_argument("--quiet", action="store_true", help="no line per finished point")
-    sweep.add_argument("--debug", **hidden)
-    plot = sub.add_parser(
-        "plot", help="charts of a results folder (history.csv) or a sweep folder (sweep.csv)",
-        description="Charts with matplotlib: of a run (reactions against the pseudo-time t, "
-                    "Newton iterations per increment, slave nodes in contact and slipping) "
-                    "or of a sweep (final reactions against each swept value).")
-    plot.add_argument("directory", type=Path, metavar="RESULTS_DIR")
-    plot.add_argument("-o", "--output", type=Path, metavar="FILE",
-                      help="picture file, format from its suffix (default: RESULTS_DIR/"
-                           "history.png, or sweep.png for a sweep folder)")
-    plot.add_argument("--debug", **hidden)
-    render = sub.add_parser(
-        "render", help="picture of one converged increment from the files of a run",
-        description="The picture of dolfinx_friction.viz.pictures.render (deformed bodies, contact "
-                    "surfaces coloured by contact pressure or stick/slip status) from the "
-                    "field files that a run wrote (output.fields = true).")
-    render.add_argument("directory", type=Path, metavar="RESULTS_DIR")
-    render.add_argument("--increment", type=int, metavar="N",
-                        help="the N-th converged increment, counted from 1 in the order of "
-                             "history.csv over all steps (negative: from the end; default: "
-                             "the last)")
-    render.add_argument("-o", "--output", type=Path, metavar="FILE.png",
-                        help="default: RESULTS_DIR/render_step<s>_increment<iiii>.png")
-    render.add_argument("--scalar", choices=("pressure", "status"), default="pressure",
-                        help="colour of the contact surfaces (default: pressure)")
-    render.add_argument("--warp", type=_scale, default=1.0,
-                        help="scale of the displacements (default 1)")
-    render.add_argument("--amplify", choices=("total", "deformation"), default="total",
-                        help="what --warp scales: the whole displacement (default) or only "
-                             "what differs from each body's mean translation")
-    render.add_argument("--von-mises", action="store_true",
-                        help="colour the bodies by their von Mises stress")
-    render.add_argument("--debug", **hidden)
-
-
-def _error(message: str) -> None:
-    print(f"dolfinx-friction: error: {message}", file=sys.stderr, flush=True)
-
-
-def _mpi_ranks() -> int:
-    for name in _MPI_SIZES:
-        if os.environ.get(name, "").isdigit():
-            return int(os.environ[name])
-    return 1
-
-
-def _interrupt(signum: int, frame) -> None:
-    """SIGINT / SIGTERM: the sweep stops its running points and ends (130 / 143)."""
-    raise Interrupted(signum)
-
-
-def _sweep(args) -> int:
-    from dolfinx_friction.io.files import file_fault
-    from dolfinx_friction.scene.toml import SceneError
-    from dolfinx_friction.cli.sweep import SWEEP_CSV, default_sweep_dir, plan, run_sweep
-    reason = file_fault(args.scene)
+def _scene_file(path: Path) -> None:
+    reason = file_fault(path)
     if reason is not None:
-        raise SceneError(f"{args.scene}: "
-                         f"{'no such scene file' if reason == 'no such file' else reason}")
+        raise SceneError(f"{path}: {'no such scene file' if reason == 'no such file' else reason}")
+
+
+def _scene(args: argparse.Namespace):
+    """The scene of ``run`` / ``check``, with what can be told before dolfinx is imported
+    and the mesh is read: the mesh file exists, and (``run``) no regular file stands where
+    the output directory is to be made."""
+    _scene_file(args.scene)
+    scene = load_scene(args.scene, args.overrides)
+    check_mesh_file(scene, args.scene)
+    if args.command == "run":
+        directory = Path(args.out) if args.out is not None else default_output_dir(scene)
+        for path in (directory, *directory.absolute().parents):
+            if path.exists():
+                if not path.is_dir():
+                    raise OutputError(f"output directory {directory}: {path} is not a directory")
+                if not os.access(path, os.W_OK | os.X_OK):
+                    raise OutputError(f"output directory {directory}: {path} is not writable")
+                break
+    return scene
+
+
+def run(args: argparse.Namespace, interruption: Interruption) -> int:
+    scene = _scene(args)
+    from mpi4py import MPI
+
+    from dolfinx_friction.cli.progress import Progress
+    from dolfinx_friction.scene.runner import run as run_scene
+    progress = Progress() if MPI.COMM_WORLD.rank == 0 and not args.quiet else None
+    try:
+        result = run_scene(scene, out=args.out, progress=progress, control=interruption)
+    finally:
+        interruption.end()
+        if progress is not None:
+            progress.close()
+    if MPI.COMM_WORLD.rank == 0 and not args.quiet:
+        s = result.summary
+        print(f"done: {s.increments} increments, {s.newton_iterations} Newton iterations, "
+              f"{s.cutbacks} cutbacks, {s.wall:.2f} s; results in {result.directory}")
+    return EXIT_OK
+
+
+def check(args: argparse.Namespace, interruption: Interruption) -> int:
+    """The scene and everything it asks of its mesh (:class:`~dolfinx_friction.scene.build.
+    DiscreteScene`); no forms, nothing solved."""
+    scene = _scene(args)
+    from mpi4py import MPI
+
+    from dolfinx_friction.scene.build import DiscreteScene
+    model = DiscreteScene(scene, MPI.COMM_WORLD)
+    if MPI.COMM_WORLD.rank == 0:
+        n_dofs = model.layout.n_global * model.gdim
+        print(f"{args.scene}: ok ({model.gdim}D, {len(scene.bodies)} bodies, "
+              f"{len(scene.contacts)} contact pairs, {len(scene.steps)} steps, {n_dofs} dofs)")
+    return EXIT_OK
+
+
+def _one_process(args: argparse.Namespace) -> None:
+    if mpi.ranks() > 1:
+        raise UsageError(f"{args.command} runs in one process (a sweep starts its own "
+                         "runs): start it without mpirun")
+
+
+def sweep(args: argparse.Namespace, interruption: Interruption) -> int:
+    _one_process(args)
+    from dolfinx_friction.cli.sweep import SWEEP_CSV, default_sweep_dir, plan, run_sweep
+    _scene_file(args.scene)
     points = plan(args.scene, args.sweeps)
     directory = args.out if args.out is not None else default_sweep_dir(args.scene)
     if directory.exists() and not directory.is_dir():
-        raise _UsageError(f"sweep folder {directory}: not a folder")
+        raise UsageError(f"sweep folder {directory}: not a folder")
     table = directory / SWEEP_CSV
     ended: list = []
 
@@ -143,52 +116,51 @@ def _sweep(args) -> int:
         print(f"[{len(ended)}/{len(points)}] {result.point.label}: {state} "
               f"({result.wall:.1f} s)", flush=True)
 
-    if threading.current_thread() is threading.main_thread():  # (even where SIG_IGN came in)
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, _interrupt)
     try:
         results = run_sweep(args.scene, points, directory, args.jobs, report)
-    except (KeyboardInterrupt, Interrupted) as exc:
-        _error(f"sweep interrupted: {len(ended)} of {len(points)} points ended"
+    except Interrupted as exc:  # (the running points are stopped and listed)
+        error(f"sweep interrupted: {len(ended)} of {len(points)} points ended"
                + (f", listed in {table}" if ended else ""))
-        return EXIT_SIGNAL[getattr(exc, "signum", signal.SIGINT)]
+        return signal_status(exc.code)
     failed = [r for r in results if r.status != 0]
     if not args.quiet:
         print(f"sweep: {len(points)} points, {len(points) - len(failed)} converged, "
               f"{len(failed)} failed; table {table}")
     if failed:
-        _error(f"{len(failed)} of {len(points)} points failed (see the reason column of "
+        error(f"{len(failed)} of {len(points)} points failed (see the reason column of "
                f"{table})")
         return EXIT_DIVERGED
-    return 0
+    return EXIT_OK
 
 
 def _incomplete(run, what: str) -> int:
     """Exit status of a picture made: 2 (and the line) for a run killed half-way."""
     if run.complete:
-        return 0
-    _error(f"{run.directory}: the run is incomplete (history.csv but no summary.json): "
+        return EXIT_OK
+    error(f"{run.directory}: the run is incomplete (history.csv but no summary.json): "
            f"{what}")
     return EXIT_INPUT
 
 
-def _plot(args) -> int:
-    from dolfinx_friction.viz.plots import plot_history, plot_sweep
+def plot(args: argparse.Namespace, interruption: Interruption) -> int:
+    _one_process(args)
     from dolfinx_friction.io.reader import read_run
+    from dolfinx_friction.viz.plots import plot_history, plot_sweep
     directory = args.directory
     if (directory / "sweep.csv").is_file():
         path, _ = plot_sweep(directory, args.output or directory / "sweep.png")
         print(f"chart: {path}")
-        return 0
+        return EXIT_OK
     run = read_run(directory)
     path = plot_history(run, args.output or directory / "history.png")
     print(f"chart: {path}")
     return _incomplete(run, f"drew its {len(run.history)} converged increments into {path}")
 
 
-def _render(args) -> int:
+def render(args: argparse.Namespace, interruption: Interruption) -> int:
+    _one_process(args)
     if args.output is not None and args.output.suffix.lower() != ".png":
-        raise _UsageError(f"-o {args.output}: render writes PNG files (FILE.png)")
+        raise UsageError(f"-o {args.output}: render writes PNG files (FILE.png)")
     from dolfinx_friction.viz.snapshot import render_files
     path, run, row = render_files(args.directory, args.output, args.increment,
                                   scalar="status" if args.scalar == "status"
@@ -200,28 +172,6 @@ def _render(args) -> int:
                             f"into {path}")
 
 
-def main(args) -> int:
-    """Run one of :data:`COMMANDS`; the exit status."""
-    from dolfinx_friction.io.reader import ResultsError
-    from dolfinx_friction.scene.toml import SceneError
-    from dolfinx_friction.cli.sweep import SweepError
-    try:
-        if _mpi_ranks() > 1:
-            raise _UsageError(f"{args.command} runs in one process (a sweep starts its own "
-                              "runs): start it without mpirun")
-        return {"sweep": _sweep, "plot": _plot, "render": _render}[args.command](args)
-    except KeyboardInterrupt:
-        _error(f"{args.command} interrupted")
-        return EXIT_SIGNAL[signal.SIGINT]
-    except (_UsageError, SweepError, ResultsError, SceneError) as exc:
-        _error(" ".join(str(exc).split()))
-        return EXIT_INPUT
-    except OSError as exc:
-        _error(f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror else str(exc))
-        return EXIT_INPUT
-    except Exception as exc:
-        if args.debug:
-            raise
-        _error(f"internal error: {type(exc).__name__}: {' '.join(str(exc).split())} "
-               "(rerun with --debug for the traceback)")
-        return EXIT_INTERNAL
+#: The commands by name.
+COMMANDS: dict[str, Callable[[argparse.Namespace, Interruption], int]] = {
+    "run": run, "check": check, "sweep": sweep, "plot": plot, "render": render}

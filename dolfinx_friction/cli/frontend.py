@@ -1,32 +1,54 @@
-"""``dolfinx-friction run|check|sweep|plot|render``: the command line of scene-format.md
-(sweep, plot and render: :mod:`dolfinx_friction.cli.commands`)."""
+"""``dolfinx-friction run|check|sweep|plot|render``: the one front end of the command line
+(scene-format.md).
+
+One parser; one handling of errors: one line on stderr (from rank 0), the exit status of
+:mod:`~dolfinx_friction.cli.exits` (``--debug`` lets every exception through, with its
+traceback); one signal handler (:mod:`~dolfinx_friction.cli.signals`); the MPI launcher read
+in one place (:mod:`~dolfinx_friction.cli.mpi`).  The commands themselves:
+:mod:`~dolfinx_friction.cli.commands`.
+"""
 from __future__ import annotations
 
-import _thread
 import argparse
 import logging
-import os
+import math
 import signal
-import sys
-import threading
 import warnings
 from pathlib import Path
 from typing import Optional, Sequence
 
 from dolfinx_friction import __version__
+from dolfinx_friction.cli import commands, mpi, signals
+from dolfinx_friction.cli.exits import EXIT_INPUT, EXIT_INTERNAL, classify, error, signal_status
+from dolfinx_friction.errors import Interrupted
 
-from dolfinx_friction.cli import commands
-from dolfinx_friction.errors import (EXIT_INPUT, EXIT_INTERNAL, EXIT_SIGNAL, Interrupted,
-                                     OutputError, classify, interruption)
-from dolfinx_friction.io.files import file_fault
-from dolfinx_friction.scene.toml import SceneError, default_output_dir, load_scene
+__all__ = ["main"]
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str):  # one line (from rank 0), no usage dump
-        if _rank() == 0:
-            print(f"dolfinx-friction: error: {message}", file=sys.stderr)
+        error(message)
         raise SystemExit(EXIT_INPUT)
+
+
+def _at_least_one(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, not {value}")
+    return value
+
+
+def _scale(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number, not {text}")
+    return value
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -36,96 +58,71 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     parser.add_argument("--version", action="version", version=f"dolfinx-friction {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    hidden = dict(action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     run = sub.add_parser("run", help="solve a scene and write its results")
     run.add_argument("scene", type=Path)
     run.add_argument("--out", type=Path, help="output directory (overrides [output] dir)")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene value by dotted path, e.g. contact.0.mu=0.2")
     run.add_argument("--quiet", action="store_true", help="no progress output")
-    run.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                     help=argparse.SUPPRESS)
+    run.add_argument("--debug", **hidden)
     check = sub.add_parser("check", help="validate a scene and its mesh, solve nothing")
     check.add_argument("scene", type=Path)
     check.add_argument("--set", dest="overrides", action="append", default=[],
                        metavar="KEY=VALUE")
-    check.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                       help=argparse.SUPPRESS)
-    commands.add_parsers(sub)  # sweep, plot, render
+    check.add_argument("--debug", **hidden)
+    sweep = sub.add_parser(
+        "sweep", help="run a scene at every point of a cartesian product of --set values",
+        description="Run SCENE at every point of the cartesian product of the --set values, "
+                    "each point in DIR/<key=value,...>/, up to -j at a time, and write "
+                    "DIR/sweep.csv (one row per point: the values, converged or not, "
+                    "increments, Newton iterations, wall time, final reactions, the reason "
+                    "of a failure).  Exit 0 when every point converged, 3 otherwise.")
+    sweep.add_argument("scene", type=Path)
+    sweep.add_argument("--set", dest="sweeps", action="append", default=[],
+                       metavar="KEY=V1,V2,...",
+                       help="values of one scene key (dotted path, as run --set); the list is "
+                            "split at commas outside brackets, braces and quotes: "
+                            "step.1.bc.0.u=[0,0,-1],[0,0,-2] is two values")
+    sweep.add_argument("-j", "--jobs", type=_at_least_one, default=1, metavar="N",
+                       help="points run at the same time (default 1)")
+    sweep.add_argument("--out", type=Path, metavar="DIR",
+                       help="sweep folder (default: <scene stem>_sweep next to the scene)")
+    sweep.add_argument("--quiet", action="store_true", help="no line per finished point")
+    sweep.add_argument("--debug", **hidden)
+    plot = sub.add_parser(
+        "plot", help="charts of a results folder (history.csv) or a sweep folder (sweep.csv)",
+        description="Charts with matplotlib: of a run (reactions against the pseudo-time t, "
+                    "Newton iterations per increment, slave nodes in contact and slipping) "
+                    "or of a sweep (final reactions against each swept value).")
+    plot.add_argument("directory", type=Path, metavar="RESULTS_DIR")
+    plot.add_argument("-o", "--output", type=Path, metavar="FILE",
+                      help="picture file, format from its suffix (default: RESULTS_DIR/"
+                           "history.png, or sweep.png for a sweep folder)")
+    plot.add_argument("--debug", **hidden)
+    render = sub.add_parser(
+        "render", help="picture of one converged increment from the files of a run",
+        description="The picture of dolfinx_friction.viz.pictures.render (deformed bodies, contact "
+                    "surfaces coloured by contact pressure or stick/slip status) from the "
+                    "field files that a run wrote (output.fields = true).")
+    render.add_argument("directory", type=Path, metavar="RESULTS_DIR")
+    render.add_argument("--increment", type=int, metavar="N",
+                        help="the N-th converged increment, counted from 1 in the order of "
+                             "history.csv over all steps (negative: from the end; default: "
+                             "the last)")
+    render.add_argument("-o", "--output", type=Path, metavar="FILE.png",
+                        help="default: RESULTS_DIR/render_step<s>_increment<iiii>.png")
+    render.add_argument("--scalar", choices=("pressure", "status"), default="pressure",
+                        help="colour of the contact surfaces (default: pressure)")
+    render.add_argument("--warp", type=_scale, default=1.0,
+                        help="scale of the displacements (default 1)")
+    render.add_argument("--amplify", choices=("total", "deformation"), default="total",
+                        help="what --warp scales: the whole displacement (default) or only "
+                             "what differs from each body's mean translation")
+    render.add_argument("--von-mises", action="store_true",
+                        help="colour the bodies by their von Mises stress")
+    render.add_argument("--debug", **hidden)
     return parser
-
-
-def _precheck(args, scene) -> None:
-    """What can be told before dolfinx is imported and the mesh is read: the mesh file
-    exists, and no regular file stands where the output directory is to be made."""
-    mesh = Path(scene.mesh)
-    reason = file_fault(mesh)
-    if reason is not None:
-        raise SceneError(f"mesh.file: {mesh}: {reason}", key="mesh.file", source=str(args.scene))
-    if args.command != "run":
-        return
-    directory = Path(args.out) if args.out is not None else default_output_dir(scene)
-    for path in (directory, *directory.absolute().parents):
-        if path.exists():
-            if not path.is_dir():
-                raise OutputError(f"output directory {directory}: {path} is not a directory")
-            if not os.access(path, os.W_OK | os.X_OK):
-                raise OutputError(f"output directory {directory}: {path} is not writable")
-            break
-
-
-def _check(args, scene) -> None:
-    from mpi4py import MPI
-    from dolfinx_friction.scene.build import ContactProblem
-    from dolfinx_friction.scene.driver import Solver
-    problem = ContactProblem(scene, MPI.COMM_WORLD)
-    # What the mesh alone cannot tell: the prescribed values of every step (overlapping
-    # bc groups that disagree on a component).  Nothing is solved.
-    Solver(problem).validate_steps()
-    if MPI.COMM_WORLD.rank == 0:
-        n_dofs = problem.layout.n_global * problem.gdim
-        print(f"{args.scene}: ok ({problem.gdim}D, {len(scene.bodies)} bodies, "
-              f"{len(scene.contacts)} contact pairs, {len(scene.steps)} steps, {n_dofs} dofs)")
-
-
-def _run(args, scene) -> None:
-    from mpi4py import MPI
-    from dolfinx_friction.scene.runner import run
-    from dolfinx_friction.cli.progress import Progress
-    progress = Progress() if MPI.COMM_WORLD.rank == 0 and not args.quiet else None
-    try:
-        result = run(scene, out=args.out, progress=progress)
-    finally:
-        if progress is not None:
-            progress.close()
-    if MPI.COMM_WORLD.rank == 0 and not args.quiet:
-        s = result.summary
-        print(f"done: {s.increments} increments, {s.newton_iterations} Newton iterations, "
-              f"{s.cutbacks} cutbacks, {s.wall:.2f} s; results in {result.directory}")
-
-
-#: what MPI launchers (Open MPI, PMIx, MPICH, MVAPICH) set in each rank's environment
-_RANK_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK", "MV2_COMM_WORLD_RANK")
-
-
-def _rank() -> int:
-    """This process's MPI rank, without initialising MPI just to print an error."""
-    mpi = sys.modules.get("mpi4py.MPI")
-    if mpi is not None and mpi.Is_initialized() and not mpi.Is_finalized():
-        return mpi.COMM_WORLD.rank
-    for name in _RANK_VARIABLES:
-        if os.environ.get(name, "").isdigit():
-            return int(os.environ[name])
-    return 0
-
-
-def _no_singleton_daemon() -> None:
-    """A run started without a launcher is an MPI singleton, for which Open MPI 4 starts a
-    daemon (orted) that only spawning processes needs (the package never spawns): ~0.3 s of
-    wall time at start-up (``benchmarks/bench_small.py``).  Ask for none, before mpi4py is
-    imported; under a launcher (its rank variables set) nothing changes.  Open MPI 5 does
-    not know the variable and ignores it, as it ignores every unknown ``OMPI_MCA_``."""
-    if not any(name in os.environ for name in _RANK_VARIABLES):
-        os.environ.setdefault("OMPI_MCA_ess_singleton_isolated", "1")
 
 
 def _quiet_libraries(debug: bool) -> None:
@@ -173,67 +170,18 @@ def _show_notices(quiet: bool) -> None:
     logger.propagate = False
 
 
-def _on_signal(signum: int, frame) -> None:
-    """SIGINT / SIGTERM: one line (rank 0), then stop where it is safe (see
-    :class:`~dolfinx_friction.errors.Interruption`); exit 130 / 143."""
-    state = interruption
-    if state.signum is not None:  # already stopping (a second Ctrl-C, or SIGTERM after it)
-        return
-    state.signum = signum
-    state.announce()
-    if not (state.solving or state.writing):
-        raise Interrupted(signum)
-
-
-def _watch_signals(signals: set) -> None:
-    """A thread that takes SIGINT / SIGTERM (blocked in every other thread), prints the line
-    at once and hands the signal to the main thread's handler.
-
-    Python runs a signal handler in the main thread only between bytecodes: not while the
-    main thread waits in MPI, fsync or HDF5.  Under ``mpirun`` that is too late: Open MPI
-    sends the ranks SIGTERM and kills them one second later (``odls_base_sigkill_timeout``).
-    This thread needs only the GIL, which such waits release."""
-    while True:
-        signum = signal.sigwait(signals)
-        interruption.received = interruption.received or signum
-        interruption.announce()  # (once: a second Ctrl-C says nothing more)
-        _thread.interrupt_main(signum)  # runs _on_signal in the main thread
-
-
-def _install_signal_handlers() -> None:
-    if interruption.armed or threading.current_thread() is not threading.main_thread():
-        return  # done already, or main() called from a thread (signals are the caller's)
-    interruption.armed = True
-    interruption.rank = _rank()  # before MPI starts: from the launcher's environment
-    signals = {signal.SIGINT, signal.SIGTERM}
-    for signum in signals:
-        signal.signal(signum, _on_signal)
-    signal.pthread_sigmask(signal.SIG_BLOCK, signals)  # inherited by threads started later
-    threading.Thread(target=_watch_signals, args=(signals,), daemon=True,
-                     name="dolfinx-friction-signals").start()
-
-
 def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the command line ``argv`` (default: ``sys.argv[1:]``); the exit status."""
     args = _parser().parse_args(argv)
     _quiet_libraries(args.debug)
-    if args.command in commands.COMMANDS:
-        return commands.main(args)
     _show_notices(getattr(args, "quiet", False))
-    _no_singleton_daemon()
-    _install_signal_handlers()
+    mpi.no_singleton_daemon()
+    interruption = signals.install(args.command, mpi.rank())
     try:
-        reason = file_fault(args.scene)
-        if reason is not None:
-            raise SceneError(f"{args.scene}: "
-                             f"{'no such scene file' if reason == 'no such file' else reason}")
-        # The scene is read and validated before dolfinx is imported: a bad scene is
-        # answered at once.
-        scene = load_scene(args.scene, args.overrides)
-        _precheck(args, scene)
-        _run(args, scene) if args.command == "run" else _check(args, scene)
-    except Interrupted as exc:  # the line was printed when the signal came
-        return EXIT_SIGNAL.get(exc.signum, 128 + exc.signum)
-    except Exception as exc:  # one line on stderr (rank 0), a traceback only with --debug
+        status = commands.COMMANDS[args.command](args, interruption)
+    except (Interrupted, KeyboardInterrupt) as exc:  # (the line of a run: said already)
+        return signal_status(interruption.stopped(getattr(exc, "code", signal.SIGINT)))
+    except Exception as exc:
         if args.debug:
             raise
         status, message = classify(exc)
@@ -241,15 +189,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             status = EXIT_INTERNAL
             message = (f"internal error: {type(exc).__name__}: {message} "
                        "(rerun with --debug for the traceback)")
-        if _rank() == 0:
-            print(f"dolfinx-friction: error: {message}", file=sys.stderr, flush=True)
+        error(message)
         return status
-    if interruption.announced:  # a signal came after the last checkpoint: say what was said
-        # the main thread may finish before the handler ran: the signal thread's signal
-        # counts, and the late handler then finds the run already stopping
-        interruption.signum = interruption.signum or interruption.received
-        return EXIT_SIGNAL.get(interruption.signum, 128 + interruption.signum)
-    return 0
+    if interruption.announced:  # a signal after the last checkpoint: as the line said
+        return signal_status(interruption.stopped(0))
+    return status
 
 
 if __name__ == "__main__":

@@ -32,9 +32,10 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 import dolfinx_friction
-from dolfinx_friction.io.files import file_fault
-from dolfinx_friction.io.reader import ResultsError, read_run, write_atomic
+from dolfinx_friction.io.files import write_atomic
+from dolfinx_friction.io.reader import ResultsError, read_run
 from dolfinx_friction.scene.toml import load_scene
+from dolfinx_friction.scene.validation import check_mesh_file
 
 __all__ = ["SweepError", "Point", "PointResult", "split_values", "plan", "run_sweep",
            "SWEEP_CSV", "default_sweep_dir"]
@@ -142,8 +143,8 @@ def _folder_names(labels: list[str]) -> list[str]:
 
 def plan(scene: Path, options: Sequence[str]) -> list[Point]:
     """The points of a sweep, every one validated by the scene reader (and the mesh file
-    checked) before anything runs.  Raises :class:`SweepError` or the reader's
-    ``SceneError`` (one line naming the key)."""
+    checked) before anything runs.  Raises :class:`SweepError` or ``SceneError`` (one line
+    naming the key)."""
     if not options:
         raise SweepError("sweep: give at least one --set KEY=V1,V2,...")
     axes = [_axis(option) for option in options]
@@ -157,12 +158,10 @@ def plan(scene: Path, options: Sequence[str]) -> list[Point]:
               in enumerate(zip(combos, _folder_names(labels)), 1)]
     checked: set[Path] = set()
     for point in points:
-        mesh = Path(load_scene(scene, point.overrides).mesh)
-        if mesh not in checked:
-            checked.add(mesh)
-            reason = file_fault(mesh)
-            if reason is not None:
-                raise SweepError(f"{scene}: mesh.file: {mesh}: {reason}")
+        loaded = load_scene(scene, point.overrides)
+        if Path(loaded.mesh) not in checked:
+            checked.add(Path(loaded.mesh))
+            check_mesh_file(loaded, scene)
     return points
 
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from dolfinx_friction import _compat as compat
 from dolfinx_friction.contact.shapes import FACE_TYPES, FaceType, face_areas, surface_vector
+from dolfinx_friction.fem.materials import out_of_plane
 from dolfinx_friction.fem.numbering import BodyField
 
 _FACE_TYPE = {("triangle", 1): "L2", ("triangle", 2): "L3", ("quadrilateral", 1): "L2",
@@ -102,7 +103,7 @@ class SlaveNodes:
         """``A_p`` on the faces as deformed by the body's current displacement."""
         f = self.field
         x = f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)]
-        thickness = f.body.thickness if f.gdim == 2 else 1.0
+        thickness = out_of_plane(f.body.thickness, f.gdim)
         areas = thickness * face_areas(self.face, x[self._facet_nodes])
         share = np.zeros((self._facet_nodes.size, f.gdim))
         share[:, 0] = (areas[:, None] * np.asarray(self.face.area_weights)[None, :]).ravel()

@@ -1,12 +1,22 @@
-"""Checks on input files that need neither dolfinx nor gmsh."""
+"""Files without dolfinx or gmsh: checks on input files, and atomic writes.
+
+Every file the package writes whole (``summary.json``, ``sweep.csv``, the XDMF time
+series, charts and pictures, mesh-cache entries) is written through :func:`atomic_path`:
+into a hidden temporary file beside it, flushed to disk, then renamed into place.  A
+reader, or a kill at any moment, sees the old file or the new one, never a part; a kill
+may leave the hidden ``.<stem>.<token>.partial<suffix>`` file, which is never a result.
+"""
 from __future__ import annotations
 
+import contextlib
 import os
+import secrets
 import stat
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Optional, Union
 
-__all__ = ["file_fault"]
+__all__ = ["atomic_path", "file_fault", "write_atomic"]
 
 
 def file_fault(path: Union[str, Path]) -> Optional[str]:
@@ -31,3 +41,33 @@ def file_fault(path: Union[str, Path]) -> Optional[str]:
     else:  # pragma: no cover
         kind = "special"
     return f"is {kind}, not a regular file"
+
+
+@contextlib.contextmanager
+def atomic_path(path: Union[str, Path]) -> Iterator[Path]:
+    """A temporary path to write the new content of ``path`` into, for the ``with`` block.
+
+    The temporary file is hidden, beside ``path``, with its suffix (writers that choose
+    the format by the suffix see the right one) and a name of its own per call
+    (concurrent writers of one path do not mix).  When the block ends it is synced to
+    disk and renamed onto ``path``; when the block raises it is removed.
+    """
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(4)}.partial"
+                         f"{path.suffix}")
+    try:
+        yield tmp
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def write_atomic(path: Union[str, Path], data: Union[str, bytes]) -> None:
+    """Write ``data`` (text as UTF-8) to ``path`` through :func:`atomic_path`."""
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        f.write(data.encode() if isinstance(data, str) else data)

@@ -26,13 +26,13 @@ import hashlib
 import json
 import logging
 import os
-import tempfile
 from pathlib import Path
 from typing import Optional, Sequence
 
 import numpy as np
 
 from dolfinx_friction import __version__
+from dolfinx_friction.io.files import atomic_path
 
 ENV = "DOLFINX_FRICTION_CACHE"
 FORMAT = 1
@@ -85,19 +85,13 @@ def load(name: str) -> Optional[tuple[dict, dict[str, np.ndarray]]]:
 def store(name: str, header: dict, arrays: dict[str, np.ndarray]) -> None:
     """Write the entry ``name`` (atomically); drop the oldest beyond :data:`MAX_ENTRIES`."""
     folder = directory()
-    tmp = None
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=folder, suffix=".part", delete=False) as f:
-            tmp = f.name
+        with atomic_path(folder / f"{name}.npz") as tmp, open(tmp, "wb") as f:
             np.savez(f, __header__=np.array(json.dumps(header)), **arrays)
-        os.replace(tmp, folder / f"{name}.npz")
-        tmp = None
-        entries = sorted(folder.glob("*.npz"), key=lambda p: p.stat().st_mtime)
+        entries = sorted((p for p in folder.glob("*.npz") if not p.name.startswith(".")),
+                         key=lambda p: p.stat().st_mtime)  # (not the others' partial files)
         for old in entries[:max(len(entries) - MAX_ENTRIES, 0)]:
             old.unlink(missing_ok=True)
     except (OSError, TypeError, ValueError) as exc:
         _log.debug("mesh cache entry %s not written: %s", name, exc)
-    finally:
-        if tmp is not None:
-            Path(tmp).unlink(missing_ok=True)

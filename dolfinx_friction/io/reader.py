@@ -10,31 +10,15 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Union
 
-__all__ = ["ResultsError", "RunFiles", "read_csv", "read_run", "write_atomic"]
+__all__ = ["ResultsError", "RunFiles", "read_csv", "read_run"]
 
 
 class ResultsError(ValueError):
     """A folder or file that cannot be read as results (one line, naming it)."""
-
-
-def write_atomic(path: Path, data: Union[str, bytes]) -> None:
-    """Write ``path`` through a hidden temporary file renamed into place (after ``fsync``):
-    a reader, or a kill at any moment, sees the old file or the new one, never a part."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    try:
-        with open(tmp, "wb") as f:
-            f.write(data.encode() if isinstance(data, str) else data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except OSError:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:

@@ -22,7 +22,7 @@ in this order: the rows of ``contact.csv``, the field folder
   ``.<name>.partial`` scratch folder, which is never a result;
 * each time series ``fields/<body>.xdmf`` lists the increments of ``history.csv``,
   possibly followed by that next one (its folder in place), and only complete folders;
-  a hidden ``.<body>.xdmf.tmp`` may be left and is not a result;
+  a hidden ``.<body>.<token>.partial.xdmf`` may be left and is not a result;
 * every line of the tables ends with a newline: an increment's rows go out in a
   single ``write(2)`` of whole lines (a reader may still treat a last line
   without its newline as incomplete, should the kernel ever cut such a write
@@ -55,8 +55,9 @@ from dolfinx_friction import _compat as compat
 from dolfinx_friction.io import xdmf_series as time_series
 from dolfinx_friction.contact.element import STATUS_NAMES
 from dolfinx_friction.errors import OutputError
+from dolfinx_friction.fem.contact_fields import SLAVE_COLUMNS, slave_rows
 from dolfinx_friction.scene.build import ContactProblem
-from dolfinx_friction.io.reader import write_atomic as _write_atomic
+from dolfinx_friction.io.files import write_atomic
 from dolfinx_friction.scene.provenance import file_sha256
 from dolfinx_friction.scene.driver import Increment, RunSummary
 
@@ -254,10 +255,9 @@ class ResultWriter:
         blocks = []
         for name, pair in self.problem.pairs.items():
             st = pair.state()
-            s = st.has_element
-            blocks.append(np.column_stack([self._node_ids[name][s], st.X[s], st.gap[s],
-                                           st.pressure[s], st.normal_force[s],
-                                           st.tangential_force[s], st.slip[s], st.status[s]]))
+            rows = slave_rows(st)
+            blocks.append(np.column_stack([self._node_ids[name][st.has_element],
+                                           *(rows[c] for c in SLAVE_COLUMNS)]))
         width = 3 + 3 * self.problem.gdim + 3
         local = np.concatenate(blocks) if blocks else np.zeros((0, width))
         rows = self.comm.gather(local, root=0)
@@ -310,7 +310,7 @@ class ResultWriter:
         }
         data.update(extra or {})
         try:
-            _write_atomic(self.dir / "summary.json", json.dumps(data, indent=2) + "\n")
+            write_atomic(self.dir / "summary.json", json.dumps(data, indent=2) + "\n")
         except OSError as exc:
             return _fault(self.dir / "summary.json", exc)
         return None
@@ -335,23 +335,6 @@ class FieldWriter:
         self.outputs = [compat.output_spaces(f) for f in problem.fields]
         # compiled once: a form compiler cache hit still costs ~10 ms per expression
         self.stresses = [self._stresses(f) for f in problem.fields]
-
-    def _contact_fields(self, field) -> dict[str, np.ndarray]:
-        """Nodal contact values of a body's slave nodes (owned nodes; 0 elsewhere)."""
-        n, d = len(field.X), self.problem.gdim
-        out = {"contact_pressure": np.zeros((n, 1)), "tangential_traction": np.zeros((n, d)),
-               "slip": np.zeros((n, 1)), "status": np.full((n, 1), -1.0)}
-        for contact in self.problem.scene.contacts:
-            if self.problem.group_fields(contact.slave)[0] is not field:
-                continue
-            st = self.problem.pair_of(contact).state()
-            s = st.has_element
-            nodes = st.nodes[s]
-            out["contact_pressure"][nodes, 0] = st.pressure[s]
-            out["tangential_traction"][nodes] = st.traction[s]  # acting on the slave body
-            out["slip"][nodes, 0] = st.slip[s]
-            out["status"][nodes, 0] = st.status[s]
-        return out
 
     def _stresses(self, field) -> list:
         """Cell functions and the expressions that fill them: the Cauchy stress
@@ -381,7 +364,7 @@ class FieldWriter:
             for f, expression in stresses:
                 f.interpolate(expression)
             try:  # HDF5 writes collectively: every rank sees the failure
-                compat.write_fields(path, field, spaces, self._contact_fields(field), inc.t,
+                compat.write_fields(path, field, spaces, self.problem.contact_fields(field), inc.t,
                                     [f for f, _ in stresses])
             except (RuntimeError, OSError) as exc:
                 error = _fault(self.dir / name / path.name, exc)
@@ -414,11 +397,11 @@ class FieldWriter:
         for name, series in grids.items():
             path = self.dir / f"{name}.xdmf"
             try:
-                _write_atomic(path, time_series.collection(name, series))
+                write_atomic(path, time_series.collection(name, series))
             except OSError as exc:
                 try:  # the series written already drop this increment, then its folder goes
                     for done in written:
-                        _write_atomic(self.dir / f"{done}.xdmf",
+                        write_atomic(self.dir / f"{done}.xdmf",
                                       time_series.collection(done, self._series[done]))
                     shutil.rmtree(folder)
                 except OSError:

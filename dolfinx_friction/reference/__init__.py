@@ -1,5 +1,6 @@
 """References to verify against: closed-form solutions (Hertz, Cattaneo–Mindlin, ...),
-the CalculiX deck writer and runner, and the comparisons of contact results."""
+the CalculiX deck writer and runner, the comparisons of contact results, and the meshes
+(meshes) and CalculiX comparison scenes (cases) that the tests and benchmarks share."""
 from dolfinx_friction._lazy import lazy_names
 
 _PUBLIC = {

@@ -4,10 +4,9 @@
 input deck for CalculiX CrunchiX (tested with 2.20, Debian ``calculix-ccx``)
 that models the same problem as dolfinx_friction:
 
-* the mesh is read from the scene's Gmsh mesh with the gmsh API; every body
-  gets its own copy of its nodes, so bodies never share nodes (as in
-  :mod:`dolfinx_friction.io.gmsh`); first-order hexahedra become ``C3D8``
-  and tetrahedra ``C3D4``;
+* the mesh is split into bodies as for our own runs (:mod:`dolfinx_friction.io.msh`):
+  every body gets its own copy of its nodes, so bodies never share nodes;
+  first-order hexahedra become ``C3D8`` and tetrahedra ``C3D4``;
 * one element set, material and ``*SOLID SECTION`` per body: ``*ELASTIC`` with
   E and nu for ``model = "linear"`` and ``"saint-venant-kirchhoff"``,
   ``*HYPERELASTIC, NEO HOOKE`` with ``C10 = mu/2``, ``D1 = 2/kappa`` for
@@ -72,7 +71,8 @@ from typing import Any, Optional, Sequence, Union
 import numpy as np
 
 from dolfinx_friction.contact.shapes import FACE_TYPES, face_areas
-from dolfinx_friction.io.gmsh import gmsh_file, group_elements
+from dolfinx_friction.fem.materials import bulk_modulus, lame
+from dolfinx_friction.io.msh import GMSH_NAMES, MeshSplit, read_split
 from dolfinx_friction.scene.model import MODELS, Body, ContactPair, Scene
 
 __all__ = ["CCX_FACES", "CcxError", "CcxRun", "ccx_available", "ccx_executable", "parse_dat",
@@ -89,9 +89,6 @@ CCX_FACES: dict[str, tuple[tuple[int, ...], ...]] = {
 _CELLS = {5: "C3D8", 4: "C3D4"}
 # node permutation that flips the orientation of a cell (negative Jacobian)
 _FLIP = {"C3D8": [0, 3, 2, 1, 4, 7, 6, 5], "C3D4": [0, 2, 1, 3]}
-_UNSUPPORTED = {2: "Triangle 3", 3: "Quadrilateral 4", 9: "Triangle 6", 10: "Quadrilateral 9",
-                16: "Quadrilateral 8", 11: "Tetrahedron 10", 12: "Hexahedron 27",
-                17: "Hexahedron 20", 6: "Prism 6", 7: "Pyramid 5"}
 
 #: ``*CONTROLS, PARAMETERS=FIELD`` written by default: CalculiX's own criteria
 #: (largest residual below 0.5 % of the average force, largest correction
@@ -186,84 +183,52 @@ def _orient(etype: str, cells: np.ndarray, x: np.ndarray) -> np.ndarray:
     return cells
 
 
-def _gmsh_groups(gmsh) -> dict[str, tuple[int, list[int]]]:
-    named: dict[str, tuple[int, list[int]]] = {}
-    for dim, tag in gmsh.model.getPhysicalGroups():
-        name = gmsh.model.getPhysicalName(dim, tag)
-        if name:
-            named.setdefault(name, (dim, []))[1].append(tag)
-    return named
-
-
-def _extract(gmsh, body_names: Sequence[str], where: str) -> CcxMesh:
-    named = _gmsh_groups(gmsh)
-    tags, coords, _ = gmsh.model.mesh.getNodes()
-    tags = np.asarray(tags, dtype=np.int64)
-    coords = np.asarray(coords, dtype=float).reshape(-1, 3)
-    tags, first = np.unique(tags, return_index=True)
-    coords = coords[first]
-    elements = {name: group_elements(gmsh, dim, t) for name, (dim, t) in named.items()}
-
-    xs, bodies, body_tags = [], {}, {}
+def _numbered(split: MeshSplit, where: str) -> CcxMesh:
+    """The bodies of a split mesh in CalculiX numbering: nodes body after body (each body
+    its own copy, as in our meshes), cells oriented; every group on every body that holds
+    all of its nodes, facet groups as their facets, other groups as their nodes."""
+    xs, bodies = [], {}
     n_nodes, n_elems = 0, 0
-    for b in body_names:
-        if b not in named:
-            raise ValueError(f"{where}: body {b!r} is not a physical group")
-        dim, _ = named[b]
-        if dim != 3:
-            raise NotImplementedError(f"{where}: body {b!r} is {dim}D; the CalculiX export "
-                                      "handles 3D solids only")
-        kinds = elements[b]
-        if len(kinds) != 1 or next(iter(kinds)) not in _CELLS:
-            names = ", ".join(_UNSUPPORTED.get(t, f"type {t}") for t in kinds)
-            raise NotImplementedError(f"{where}: body {b!r} has {names} cells; the CalculiX "
-                                      "export handles first-order hexahedra (C3D8) and "
-                                      "tetrahedra (C3D4) only")
-        (gtype, gcells), = kinds.items()
-        etype = _CELLS[gtype]
-        nodes = np.unique(gcells)
-        pos = np.searchsorted(tags, nodes)
-        if np.any(pos >= len(tags)) or np.any(tags[np.minimum(pos, len(tags) - 1)] != nodes):
-            raise ValueError(f"{where}: body {b!r} refers to nodes that do not exist")
-        xs.append(coords[pos])
-        numbers = n_nodes + 1 + np.arange(len(nodes))
-        x_all = np.concatenate(xs)
-        cells = _orient(etype, numbers[np.searchsorted(nodes, gcells)], x_all)
-        bodies[b] = CcxBody(b, etype, n_elems + 1 + np.arange(len(cells)), cells, numbers)
-        body_tags[b] = nodes
-        n_nodes += len(nodes)
+    for body in split.bodies:
+        if split.gdim != 3:
+            raise NotImplementedError(f"{where}: body {body.name!r} is {split.gdim}D; the "
+                                      "CalculiX export handles 3D solids only")
+        if body.gmsh_type not in _CELLS:
+            raise NotImplementedError(f"{where}: body {body.name!r} has "
+                                      f"{GMSH_NAMES.get(body.gmsh_type, body.gmsh_type)} cells; "
+                                      "the CalculiX export handles first-order hexahedra "
+                                      "(C3D8) and tetrahedra (C3D4) only")
+        etype = _CELLS[body.gmsh_type]
+        xs.append(body.x)
+        numbers = n_nodes + 1 + np.arange(len(body.x))
+        cells = _orient(etype, numbers[body.cells], np.concatenate(xs))
+        bodies[body.name] = CcxBody(body.name, etype, n_elems + 1 + np.arange(len(cells)),
+                                    cells, numbers)
+        n_nodes += len(body.x)
         n_elems += len(cells)
     x = np.concatenate(xs) if xs else np.zeros((0, 3))
-
-    # every named group, in every body that holds all of its nodes (as gmsh_io does):
-    # facet groups as their facets, other groups as their nodes (one per row)
+    parts: dict[str, dict[str, list[np.ndarray]]] = {name: {} for name in split.group_dims}
+    for body in split.bodies:
+        numbers = bodies[body.name].nodes
+        parts[body.name][body.name] = [np.arange(len(numbers))]
+        for g in body.groups:
+            parts[g.name].setdefault(body.name, []).append(g.entities)
     groups: dict[str, tuple[int, list[tuple[str, np.ndarray]]]] = {}
-    for name, (dim, _) in named.items():
-        ents = list(elements[name].values())
-        if dim == 2 and any(a.shape[1] not in (3, 4) for a in ents):
-            raise NotImplementedError(f"{where}: group {name!r} has second-order facets; the "
-                                      "CalculiX export handles first-order meshes only")
-        gnodes = np.unique(np.concatenate([a.ravel() for a in ents])) if ents else np.zeros(0, int)
-        parts = []
-        for b, nodes in body_tags.items():
-            if not len(gnodes) or not np.all(np.isin(gnodes, nodes, assume_unique=True)):
-                continue
-            numbers = bodies[b].nodes
-            if dim == 2:
-                rows = np.concatenate([numbers[np.searchsorted(nodes, a)] for a in ents])
-            else:
-                rows = numbers[np.searchsorted(nodes, gnodes)][:, None]
-            parts.append((b, rows))
-        groups[name] = (dim, parts)
+    for name, on in parts.items():
+        dim = split.group_dims[name]
+        groups[name] = (dim, [
+            (b, bodies[b].nodes[np.concatenate(ents)] if dim == 2 else
+             bodies[b].nodes[np.unique(np.concatenate(ents))][:, None]) for b, ents in on.items()])
     return CcxMesh(x, bodies, groups)
 
 
 def read_mesh(source: Union[str, Path, Any], body_names: Sequence[str]) -> CcxMesh:
-    """Read a Gmsh mesh (a ``.msh`` file or the live ``gmsh`` module) in CalculiX numbering."""
-    if not isinstance(source, (str, os.PathLike)):
-        return _extract(source, body_names, f"gmsh model '{source.model.getCurrent()}'")
-    with gmsh_file(Path(source)) as gmsh:
-        return _extract(gmsh, body_names, f"mesh file '{source}'")
+    """Read a Gmsh mesh (a ``.msh`` file or the live ``gmsh`` module) in CalculiX numbering;
+    :class:`~dolfinx_friction.io.msh.MeshError` (a ValueError) for a mesh that
+    :func:`~dolfinx_friction.io.gmsh.load_mesh` refuses too."""
+    where = (f"mesh file '{source}'" if isinstance(source, (str, os.PathLike)) else
+             f"gmsh model '{source.model.getCurrent()}'")
+    return _numbered(read_split(source, body_names), where)
 
 
 # --------------------------------------------------------------------------- the deck
@@ -367,8 +332,8 @@ def _material_lines(body: Body) -> list[str]:
         if not body.nu < 0.5:
             raise ValueError(f"body {body.name!r}: nu = {body.nu} >= 0.5 for the compressible "
                              "Neo-Hookean model")
-        mu = body.E / (2.0 * (1.0 + body.nu))
-        kappa = body.E / (3.0 * (1.0 - 2.0 * body.nu))
+        _, mu = lame(body.E, body.nu)
+        kappa = bulk_modulus(body.E, body.nu)
         return ["*HYPERELASTIC, NEO HOOKE", f"{_num(0.5 * mu)}, {_num(2.0 / kappa)}"]
     return ["*ELASTIC", f"{_num(body.E)}, {_num(body.nu)}"]
 

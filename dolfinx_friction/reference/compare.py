@@ -3,23 +3,21 @@ from __future__ import annotations
 
 import numpy as np
 
+from dolfinx_friction.fem.contact_fields import slave_rows
+
 
 def contact_state(result, pair: int = 0) -> dict[str, np.ndarray]:
-    """Reference coordinates, pressure, forces, gap and status of the slave nodes with an
-    element in contact pair ``pair`` (its index in the scene; current increment), gathered
-    on every rank.
-
-    ``X_all`` holds the reference coordinates of every slave node of the pair.
+    """The slave nodes with an element in contact pair ``pair`` (its index in the scene;
+    current increment), gathered on every rank: the arrays of
+    :func:`~dolfinx_friction.fem.contact_fields.slave_rows` (``X``, ``gap``, ``pressure``,
+    ``normal_force``, ``tangential_force``, ``slip``, ``status``, ``area``), and ``X_all``,
+    the reference coordinates of every slave node of the pair.
     """
     problem = result.problem
     st = problem.pair_of(problem.scene.contacts[pair]).state()
-    s = st.has_element
-    local = dict(X=st.X[s], pressure=st.pressure[s], F_N=st.normal_force[s],
-                 F_T=st.tangential_force[s], area=st.area[s], status=st.status[s],
-                 g_N=st.gap[s])
     comm = problem.comm
-    parts = comm.allgather(local)
-    out = {k: np.concatenate([p[k] for p in parts]) for k in local}
+    parts = comm.allgather(slave_rows(st))
+    out = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     out["X_all"] = np.concatenate(comm.allgather(st.X))
     return out
 
@@ -28,7 +26,7 @@ def stick_half_width(x: np.ndarray, status: np.ndarray) -> tuple[float, float, f
     """Half-width, centre and node spacing of the stick zone along ``x``.
 
     The zone's edges lie midway between the outermost sticking nodes and their slipping
-    neighbours; ``status`` uses the element codes (1 stick, 2 slip).
+    neighbours; ``status`` in the codes of :mod:`~dolfinx_friction.fem.contact_fields`.
     """
     order = np.argsort(x)
     x, status = x[order], status[order]

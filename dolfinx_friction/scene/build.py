@@ -1,10 +1,12 @@
 """The discrete problem of a scene: bodies as UFL residuals, obstacles, contact pairs.
 
-Built once from a :class:`~dolfinx_friction.scene.model.Scene` on the composable core: each
-body's small-strain linear elastic residual is a UFL form of its own dolfinx space, each
-``[[contact]]`` a :class:`~dolfinx_friction.fem.node_to_surface.NodeToSurface` (matched by name), and
-every ``[[rigid]]`` obstacle's translation an unknown of the
-:class:`~dolfinx_friction.fem.block_problem.BlockProblem` that joins them.  The solver drives it.
+Built once from a :class:`~dolfinx_friction.scene.model.Scene` on the composable core, in
+two stages: :class:`DiscreteScene` puts the scene on its mesh and validates it (spaces,
+numbering, each ``[[contact]]`` a :class:`~dolfinx_friction.fem.node_to_surface.NodeToSurface`);
+:class:`ContactProblem` adds the equations: each body's residual a UFL form of its own
+dolfinx space, every ``[[rigid]]`` obstacle's translation an unknown of the
+:class:`~dolfinx_friction.fem.block_problem.BlockProblem` that joins them.  The solver
+drives it.
 """
 from __future__ import annotations
 
@@ -18,26 +20,22 @@ from petsc4py import PETSc
 from dolfinx_friction import _compat as compat
 
 from dolfinx_friction.io import gmsh as gmsh_io
+from dolfinx_friction.fem.contact_fields import nodal_fields
+from dolfinx_friction.fem.materials import bulk_modulus, lame, out_of_plane
 from dolfinx_friction.fem.numbering import BodyField, make_fields
+from dolfinx_friction.scene import validation
 from dolfinx_friction.scene.model import Body, ContactPair, Scene
+from dolfinx_friction.scene.validation import ModelError
 from dolfinx_friction.fem.node_to_surface import ContactSetupError, NodeToSurface, Surface, make_law
 from dolfinx_friction.fem.block_problem import BlockProblem
 
 
-class ModelError(ValueError):
-    """The scene does not fit its mesh (a missing group, a group of the wrong kind...)."""
-
-
 def _lame(body: Body, gdim: int) -> tuple[float, float]:
-    mu = body.E / (2.0 * (1.0 + body.nu))
-    lam = body.E * body.nu / ((1.0 + body.nu) * (1.0 - 2.0 * body.nu))
-    if gdim == 2 and body.plane == "stress":
-        lam = 2.0 * lam * mu / (lam + 2.0 * mu)
-    return lam, mu
+    return lame(body.E, body.nu, plane_stress=gdim == 2 and body.plane == "stress")
 
 
 def _thickness(field: BodyField) -> float:
-    return field.body.thickness if field.gdim == 2 else 1.0
+    return out_of_plane(field.body.thickness, field.gdim)
 
 
 def elastic_forms(field: BodyField) -> tuple[ufl.Form, ufl.Form]:
@@ -72,14 +70,13 @@ def strain_energy(body: Body, F3):
     Neo-Hooke (CalculiX's NEO HOOKE): ``W = C10 (I1bar - 3) + (J - 1)^2 / D1`` with
     ``I1bar = J^(-2/3) tr(F^T F)``, ``C10 = mu/2``, ``D1 = 2/kappa``, ``kappa = E/(3(1-2nu))``.
     """
-    mu = body.E / (2.0 * (1.0 + body.nu))
+    lam, mu = lame(body.E, body.nu)
     C = F3.T * F3
     if body.model == "saint-venant-kirchhoff":
-        lam = body.E * body.nu / ((1.0 + body.nu) * (1.0 - 2.0 * body.nu))
         E = 0.5 * (C - ufl.Identity(3))
         return 0.5 * lam * ufl.tr(E) ** 2 + mu * ufl.inner(E, E)
     if body.model == "neo-hookean":
-        kappa = body.E / (3.0 * (1.0 - 2.0 * body.nu))
+        kappa = bulk_modulus(body.E, body.nu)
         J = ufl.det(F3)
         return 0.5 * mu * (J ** (-2.0 / 3.0) * ufl.tr(C) - 3.0) + 0.5 * kappa * (J - 1.0) ** 2
     raise ValueError(f"body {body.name!r}: unknown model {body.model!r}")
@@ -125,12 +122,14 @@ def body_forms(field: BodyField) -> tuple[ufl.Form, Optional[ufl.Form]]:
     return _thickness(field) * ufl.inner(P, ufl.grad(v)) * dx, None
 
 
-class ContactProblem:
-    """A scene's bodies, obstacles and contact pairs as one :class:`BlockProblem`.
+class DiscreteScene:
+    """A scene on its mesh, validated: the bodies' spaces and the system numbering that
+    joins them, and the contact pairs; no forms, no system (what ``check`` builds).
 
     ``pairs`` maps each contact's name (``"slave->master"``) to its
-    :class:`NodeToSurface`; ``system.x`` is the displacement (the only copy: the bodies'
-    Functions are refreshed from it).
+    :class:`NodeToSurface`.  Raises :class:`~dolfinx_friction.scene.validation.ModelError`
+    (and the mesh loader's ``MeshError``) for a scene that does not fit its mesh or cannot
+    be solved as given (:mod:`~dolfinx_friction.scene.validation`).
     """
 
     def __init__(self, scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD,
@@ -139,17 +138,96 @@ class ContactProblem:
         names = [b.name for b in scene.bodies]
         self.meshes = meshes or gmsh_io.load_mesh(scene.mesh, names, comm)
         self.gdim = self.meshes.gdim
-        self._check_groups()
+        validation.check_groups(scene, self.meshes)
         self.fields, self.layout = make_fields(
             comm, [(b, self.meshes.bodies[b.name]) for b in scene.bodies], len(scene.rigids))
+        validation.check_solvable(scene)
+        validation.check_held(scene, self.meshes.group_bodies)
+        validation.check_bcs(scene, self.fields, self.meshes.group_bodies, comm)
         self.pairs = {f"{c.slave}->{c.master}": self._pair(c, f"contact.{i}")
                       for i, c in enumerate(scene.contacts)}
+
+    # ------------------------------------------------------------ lookups
+    def body_field(self, name: str) -> BodyField:
+        return next(f for f in self.fields if f.body.name == name)
+
+    def group_fields(self, group: str) -> list[BodyField]:
+        return [self.body_field(b) for b in self.meshes.group_bodies.get(group, ())]
+
+    def rigid_node(self, name: str) -> int:
+        return self.layout.rigid_node([r.name for r in self.scene.rigids].index(name))
+
+    def owned_group_dofs(self, group: str) -> np.ndarray:
+        """Local (rank-owned) system dof rows of every node of a group, (n_nodes, gdim)."""
+        d = self.gdim
+        rows = [(self.layout.block_offsets[f.block] + f.owned_group_nodes(group))[:, None] * d
+                + np.arange(d) for f in self.group_fields(group)]
+        return np.concatenate(rows) if rows else np.zeros((0, d), dtype=np.int64)
+
+    def rigid_dofs(self, name: str) -> np.ndarray:
+        """Local system dof rows of a rigid obstacle's translation (rank 0; empty elsewhere)."""
+        if self.comm.rank != 0:
+            return np.zeros((0, self.gdim), dtype=np.int64)
+        node = self.rigid_node(name) - self.layout.start
+        return (node * self.gdim + np.arange(self.gdim))[None]
+
+    # ------------------------------------------------------------- contact
+    def _pair(self, pair: ContactPair, key: str) -> NodeToSurface:
+        slave_field = self.group_fields(pair.slave)[0]
+        body = slave_field.body
+        pair = pair.resolved(body.E)  # K and stick_slope: by NodeToSurface, with its spacing
+        rigid = self.scene.rigid(pair.master)
+        fdim = self.gdim - 1
+        slave_tags, _ = slave_field.mesh.meshtags(fdim, [pair.slave])
+        if rigid is not None:
+            master, index = rigid, [r.name for r in self.scene.rigids].index(rigid.name)
+        else:
+            master_field = self.group_fields(pair.master)[0]
+            master = Surface(master_field.V, master_field.mesh.meshtags(fdim, [pair.master])[0], 1)
+            index = None
+        try:
+            return NodeToSurface(
+                Surface(slave_field.V, slave_tags, 1), master, spaces=[f.V for f in self.fields],
+                law=None if pair.law == "linear" else make_law(pair), K=pair.K,
+                sigma_inf=pair.sigma_inf, c0=pair.c0, E=body.E, mu=pair.mu,
+                stick_slope=pair.stick_slope, tangent=pair.tangent,
+                thickness=out_of_plane(body.thickness, self.gdim),
+                pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
+                obstacle_index=index, n_obstacles=len(self.scene.rigids),
+                body_names=(body.name, pair.master))
+        except ContactSetupError as error:  # e.g. a default K that overflows
+            raise ModelError(f"{key}: {error}") from None
+
+    def pair_of(self, contact: ContactPair) -> NodeToSurface:
+        """The :class:`NodeToSurface` of a scene contact."""
+        return self.pairs[f"{contact.slave}->{contact.master}"]
+
+    def contact_fields(self, field: BodyField) -> dict[str, np.ndarray]:
+        """The nodal contact fields of a body (:func:`~dolfinx_friction.fem.contact_fields.
+        nodal_fields`: the pairs whose slave surface is on it; owned nodes, ghosts empty)."""
+        states = [self.pair_of(c).state() for c in self.scene.contacts
+                  if self.group_fields(c.slave)[0] is field]
+        return nodal_fields(states, len(field.X), self.gdim)
+
+
+class ContactProblem(DiscreteScene):
+    """A scene's bodies, obstacles and contact pairs as one :class:`BlockProblem`
+    (``system``): a :class:`DiscreteScene` with its equations.
+
+    ``system.x`` is the displacement (the only copy: the bodies' Functions are refreshed
+    from it).
+    """
+
+    def __init__(self, scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD,
+                 meshes: Optional[gmsh_io.MeshSet] = None):
+        super().__init__(scene, comm, meshes)
         self.follower_pressures = self._follower_pressures()
         forms = [self._forms(f) for f in self.fields]
         self.system = BlockProblem([F for F, _ in forms], [f.u for f in self.fields],
                                    contacts=list(self.pairs.values()),
                                    jacobians=[J for _, J in forms],
-                                   obstacles=len(scene.rigids), names=names)
+                                   obstacles=len(scene.rigids),
+                                   names=[b.name for b in scene.bodies])
         self.system.guards += [self._inversion_guard(f) for f in self.fields
                                if f.body.finite_strain]
 
@@ -197,142 +275,7 @@ class ContactProblem:
         """The displacement of every body and obstacle, in system numbering."""
         return self.system.x
 
-    # ------------------------------------------------------------ lookups
-    def _check_groups(self) -> None:
-        s, dims = self.scene, self.meshes.group_dims
-        fdim = self.gdim - 1
-        for i, r in enumerate(s.rigids):
-            if r.name in dims:
-                raise ModelError(f"rigid.{i}.name: {r.name!r} is also a physical group of the "
-                                 "mesh: ambiguous as a contact master (rename the obstacle)")
-        for k, c in enumerate(s.contacts):
-            if c.slave not in dims:
-                raise ModelError(f"contact.{k}.slave: no physical group {c.slave!r} in the mesh")
-            if dims[c.slave] != fdim:
-                raise ModelError(f"contact.{k}.slave: group {c.slave!r} has dimension "
-                                 f"{dims[c.slave]}, contact surfaces need {fdim}")
-            if s.rigid(c.master) is None:
-                if c.master not in dims:
-                    raise ModelError(f"contact.{k}.master: {c.master!r} is neither a physical "
-                                     f"group of the mesh nor a [[rigid]] obstacle")
-                if dims[c.master] != fdim:
-                    raise ModelError(f"contact.{k}.master: group {c.master!r} has dimension "
-                                     f"{dims[c.master]}, contact surfaces need {fdim}")
-            for role in ("slave", "master"):
-                g = getattr(c, role)
-                if g not in dims:
-                    continue
-                owners = self.meshes.group_bodies.get(g, ())
-                if len(owners) != 1:
-                    touched = self.meshes.group_touches.get(g, ())
-                    raise ModelError(
-                        f"contact.{k}.{role}: group {g!r} " + (
-                            f"lies on {len(owners)} bodies at once ({', '.join(owners)}: "
-                            "their meshes share its nodes)" if owners else
-                            f"spans the bodies {', '.join(touched)}" if len(touched) > 1 else
-                            "lies on none of the bodies") +
-                        "; a contact surface must lie on exactly one body")
-                inside = self.meshes.bodies[owners[0]].interior_facets(g)
-                if inside:
-                    raise ModelError(f"contact.{k}.{role}: group {g!r} has {inside} facet(s) "
-                                     f"inside body {owners[0]!r}; a contact surface must be on "
-                                     "the body's boundary")
-        for i, step in enumerate(s.steps):
-            for j, bc in enumerate(step.bcs):
-                self._check_node_group(bc.on, f"step.{i}.bc.{j}.on")
-            for j, load in enumerate(step.loads):
-                self._check_node_group(load.on, f"step.{i}.load.{j}.on")
-                if dims[load.on] != fdim:
-                    raise ModelError(f"step.{i}.load.{j}.on: group {load.on!r} is not a facet "
-                                     f"group")
-        for g in s.output.reactions or ():
-            self._check_node_group(g, "output.reactions")
-        wrong = [(key, v) for key, v in _vectors(s) if len(v) != self.gdim]
-        if wrong:
-            key, v = wrong[0]
-            raise ModelError(f"{key} has {len(v)} components, but the mesh {s.mesh} is "
-                             f"{self.gdim}D (every vector has the mesh dimension)")
-        for b in s.bodies:
-            if self.gdim == 3 and (b.plane != "strain" or b.thickness != 1.0):
-                raise ModelError(f"body {b.name!r}: plane/thickness apply to 2D meshes only")
-
-    def _check_node_group(self, group: str, key: str) -> None:
-        if group not in self.meshes.group_dims:
-            raise ModelError(f"{key}: no physical group {group!r} in the mesh")
-        if not self.meshes.group_bodies.get(group):
-            raise ModelError(f"{key}: group {group!r} lies on no deformable body")
-
-    def body_field(self, name: str) -> BodyField:
-        return next(f for f in self.fields if f.body.name == name)
-
-    def group_fields(self, group: str) -> list[BodyField]:
-        return [self.body_field(b) for b in self.meshes.group_bodies.get(group, ())]
-
-    def rigid_node(self, name: str) -> int:
-        return self.layout.rigid_node([r.name for r in self.scene.rigids].index(name))
-
-    def owned_group_dofs(self, group: str) -> np.ndarray:
-        """Local (rank-owned) system dof rows of every node of a group, (n_nodes, gdim)."""
-        d = self.gdim
-        rows = [(self.layout.block_offsets[f.block] + f.owned_group_nodes(group))[:, None] * d
-                + np.arange(d) for f in self.group_fields(group)]
-        return np.concatenate(rows) if rows else np.zeros((0, d), dtype=np.int64)
-
-    def rigid_dofs(self, name: str) -> np.ndarray:
-        """Local system dof rows of a rigid obstacle's translation (rank 0; empty elsewhere)."""
-        if self.comm.rank != 0:
-            return np.zeros((0, self.gdim), dtype=np.int64)
-        node = self.rigid_node(name) - self.layout.start
-        return (node * self.gdim + np.arange(self.gdim))[None]
-
     def rigid_body_modes(self) -> PETSc.NullSpace:
         """Translations and rotations of every body, orthonormal: the near null space
         that algebraic multigrid needs (see :meth:`BlockProblem.rigid_body_modes`)."""
         return self.system.rigid_body_modes()
-
-    # ------------------------------------------------------------- contact
-    def _pair(self, pair: ContactPair, key: str) -> NodeToSurface:
-        slave_field = self.group_fields(pair.slave)[0]
-        body = slave_field.body
-        pair = pair.resolved(body.E)  # K and stick_slope: by NodeToSurface, with its spacing
-        rigid = self.scene.rigid(pair.master)
-        fdim = self.gdim - 1
-        slave_tags, _ = slave_field.mesh.meshtags(fdim, [pair.slave])
-        if rigid is not None:
-            master, index = rigid, [r.name for r in self.scene.rigids].index(rigid.name)
-        else:
-            master_field = self.group_fields(pair.master)[0]
-            master = Surface(master_field.V, master_field.mesh.meshtags(fdim, [pair.master])[0], 1)
-            index = None
-        try:
-            return NodeToSurface(
-                Surface(slave_field.V, slave_tags, 1), master, spaces=[f.V for f in self.fields],
-                law=None if pair.law == "linear" else make_law(pair), K=pair.K,
-                sigma_inf=pair.sigma_inf, c0=pair.c0, E=body.E, mu=pair.mu,
-                stick_slope=pair.stick_slope, tangent=pair.tangent,
-                thickness=body.thickness if self.gdim == 2 else 1.0,
-                pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
-                obstacle_index=index, n_obstacles=len(self.scene.rigids),
-                body_names=(body.name, pair.master))
-        except ContactSetupError as error:  # e.g. a default K that overflows
-            raise ModelError(f"{key}: {error}") from None
-
-    def pair_of(self, contact: ContactPair) -> NodeToSurface:
-        """The :class:`NodeToSurface` of a scene contact."""
-        return self.pairs[f"{contact.slave}->{contact.master}"]
-
-
-def _vectors(scene: Scene) -> list[tuple[str, tuple]]:
-    """Every vector of the scene with its key path (arrays indexed from 0)."""
-    out = []
-    for i, step in enumerate(scene.steps):
-        out += [(f"step.{i}.bc.{j}.u", bc.u) for j, bc in enumerate(step.bcs)]
-        out += [(f"step.{i}.load.{j}.traction", ld.traction) for j, ld in enumerate(step.loads)
-                if ld.traction is not None]
-        for j, r in enumerate(step.rigid):
-            name = "displacement" if r.displacement is not None else "force"
-            out.append((f"step.{i}.rigid.{j}.{name}", getattr(r, name)))
-    for i, r in enumerate(scene.rigids):
-        out += [(f"rigid.{i}.{name}", getattr(r, name))
-                for name in ("point", "normal", "center", "axis") if getattr(r, name) is not None]
-    return out

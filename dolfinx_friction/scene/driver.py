@@ -15,22 +15,17 @@ from typing import Callable, Optional
 import numpy as np
 
 from dolfinx_friction.nls import stepping
-from dolfinx_friction.errors import interruption
 from dolfinx_friction.nls.newton import Newton
-from dolfinx_friction.scene.build import ContactProblem, ModelError
+from dolfinx_friction.scene.build import ContactProblem
+from dolfinx_friction.scene.control import RunControl, checkpoint
 from dolfinx_friction.nls.stepping import IncrementRecord
 from dolfinx_friction.fem.block_problem import Timers
+from dolfinx_friction.fem.loads import unit_loads
+from dolfinx_friction.fem.materials import out_of_plane
 
 
 class ConvergenceError(RuntimeError):
     """An increment failed after all cutbacks."""
-
-
-#: Largest Young's modulus, penalty K or stick slope a scene may give: forces of order
-#: E L^2 are squared in residual norms (sqrt of the largest double: 1.3e154); 1e150 leaves
-#: room for the areas, displacements and dof counts, and is far beyond any material in any
-#: unit system (diamond: 1.2e12 Pa).
-MAX_MODULUS = 1e150
 
 
 @dataclass
@@ -122,91 +117,11 @@ class Solver:
 
     def _loads(self, group: str) -> list:
         if group not in self._unit_loads:
-            from dolfinx_friction.fem import loads as bulk
             self._unit_loads[group] = [
-                (self.problem.layout.owned_slice(f.block, self.gdim), bulk.unit_loads(f, group),
-                 f) for f in self.problem.group_fields(group)]
+                (self.problem.layout.owned_slice(f.block, self.gdim),
+                 unit_loads(f, group, out_of_plane(f.body.thickness, self.gdim)), f)
+                for f in self.problem.group_fields(group)]
         return self._unit_loads[group]
-
-    def validate_steps(self) -> None:
-        """Check the prescribed values of every step before solving anything (collective):
-        moduli whose forces would overflow, bodies that nothing holds, conflicting bcs."""
-        self._check_magnitudes()
-        self._check_held()
-        saved = (dict(self._bc_state), dict(self._load_state), dict(self._rigid_state))
-        try:
-            for index in range(len(self.problem.scene.steps)):
-                self._step_loading(index)
-        finally:
-            self._bc_state, self._load_state, self._rigid_state = saved
-
-    def _check_magnitudes(self) -> None:
-        """Refuse moduli and penalties that are finite but too large to solve with: forces
-        of order E (or K) times an area are squared in the residual norms, which overflow
-        beyond about 1e154 (E = 1e300 used to end as "diverged", residual inf)."""
-        scene, limit = self.problem.scene, MAX_MODULUS
-        for i, body in enumerate(scene.bodies):
-            if body.E > limit:
-                raise ModelError(f"body.{i}.E = {body.E:g} is too large to solve with (forces "
-                                 f"of order E times an area are squared in the residual norm, "
-                                 f"which overflows): at most {limit:g}; use other units")
-        for i, pair in enumerate(scene.contacts):
-            for key in ("K", "stick_slope"):
-                value = getattr(pair, key)
-                if isinstance(value, (int, float)) and value > limit:
-                    raise ModelError(f"contact.{i}.{key} = {value:g} is too large to solve with "
-                                     f"(the contact forces are squared in the residual norm, "
-                                     f"which overflows): at most {limit:g}; use other units")
-
-    def _check_held(self) -> None:
-        """Refuse, before solving, a body that nothing holds against rigid motion in some
-        step: no displacement constraint on any of its groups, and no contact pair joining
-        it (through other bodies) to a constrained body or to an obstacle whose translation
-        is prescribed.  The scene and the mesh's group table are the same on every rank."""
-        p, scene = self.problem, self.problem.scene
-        rigids = {r.name for r in scene.rigids}
-        parent = {name: name for name in [b.name for b in scene.bodies] + sorted(rigids)}
-
-        def root(name: str) -> str:
-            while parent[name] != name:
-                name = parent[name]
-            return name
-
-        def owners(group: str) -> list[str]:
-            return [group] if group in rigids else [f.body.name for f in p.group_fields(group)]
-
-        for pair in scene.contacts:  # a contact pair could hold either side by the other
-            ends = owners(pair.slave) + owners(pair.master)
-            for other in ends[1:]:
-                parent[root(other)] = root(ends[0])
-        bcs: dict[str, tuple] = {}
-        forced: dict[str, bool] = {}  # rigid obstacle -> force-controlled (else prescribed)
-        for k, step in enumerate(scene.steps):
-            bcs.update({bc.on: bc.u for bc in step.bcs})
-            forced.update({r.name: r.force is not None for r in step.rigid})
-            held = {root(name) for group, u in bcs.items() if any(c is not None for c in u)
-                    for name in owners(group)}
-            held |= {root(r) for r in rigids if not forced.get(r, False)}
-            for i, body in enumerate(scene.bodies):
-                if root(body.name) not in held:
-                    raise ModelError(
-                        f"body.{i} ({body.name!r}) is not held against rigid motion in step "
-                        f"{k}: no displacement constraint on any of its groups, and no contact "
-                        f"pair joins it to a constrained body or a prescribed obstacle")
-
-    def _report_conflict(self, index: int, conflict: np.ndarray) -> None:
-        """Name the bc groups that prescribe different values to the same components."""
-        found = set()
-        for group, comps in self._bc_state.items():
-            rows = self.problem.owned_group_dofs(group)
-            for c, value in enumerate(comps):
-                if value is not None and conflict[rows[:, c]].any():
-                    found.add((group, "xyz"[c]))
-        found = sorted(set().union(*self.comm.allgather(found)))
-        groups = sorted({g for g, _ in found})
-        axes = "".join(sorted({a for _, a in found}))
-        raise ModelError(f"step.{index}: bc groups {', '.join(map(repr, groups))} overlap and "
-                         f"prescribe different values of component(s) {axes} to shared nodes")
 
     def _step_loading(self, index: int) -> StepLoading:
         p, d = self.problem, self.gdim
@@ -214,15 +129,14 @@ class Solver:
         self._bc_state.update({bc.on: bc.u for bc in step.bcs})
         self._load_state.update({ld.on: (ld.traction, ld.pressure) for ld in step.loads})
         self._rigid_state.update({r.name: (r.displacement, r.force) for r in step.rigid})
-        # prescribed displacements: sums and counts per dof detect conflicting values
+        # prescribed displacements (bcs that share nodes agree: scene.validation.check_bcs)
         n = p.layout.n_owned * d
-        total, total_sq, count = np.zeros(n), np.zeros(n), np.zeros(n)
+        total, count = np.zeros(n), np.zeros(n)
         for group, comps in self._bc_state.items():
             rows = p.owned_group_dofs(group)
             for c, value in enumerate(comps):
                 if value is not None:
                     np.add.at(total, rows[:, c], value)
-                    np.add.at(total_sq, rows[:, c], value * value)
                     np.add.at(count, rows[:, c], 1.0)
         f_end = np.zeros(n)
         for rigid in p.scene.rigids:
@@ -236,10 +150,6 @@ class Solver:
                 total[rows] += disp
                 count[rows] += 1.0
         mean = np.divide(total, count, out=np.zeros(n), where=count > 0)
-        spread = np.divide(total_sq, count, out=np.zeros(n), where=count > 0) - mean ** 2
-        conflict = spread > 1e-24 * np.maximum(1.0, mean ** 2)
-        if self.comm.allreduce(int(conflict.any())):
-            self._report_conflict(index, conflict)
         pressures = []
         for group, (traction, pressure) in self._load_state.items():
             for owned, unit, f in self._loads(group):
@@ -258,21 +168,26 @@ class Solver:
                            index == 0, pressures)
 
     # -------------------------------------------------------------- run
-    def run(self, on_increment: Optional[Callable[[Increment], None]] = None) -> RunSummary:
-        # SIGINT/SIGTERM (command line only): every residual evaluation is a collective
-        # checkpoint where all ranks stop together (errors.Interruption); first in the
-        # guards, so that it is reached whatever the other guards find
-        def checkpoint() -> None:
-            interruption.checkpoint(self.comm)
-        self.system.guards.insert(0, checkpoint)
-        interruption.solving = True
-        try:
-            return self._run(on_increment)
-        finally:
-            interruption.solving = False
-            self.system.guards.remove(checkpoint)
+    def run(self, on_increment: Optional[Callable[[Increment], None]] = None,
+            control: Optional[RunControl] = None) -> RunSummary:
+        """Solve every step; ``on_increment`` sees each converged increment.  ``control``
+        (:mod:`~dolfinx_friction.scene.control`) is told the increment worked on and asked
+        whether to stop at every residual evaluation.  Raises :class:`ConvergenceError`."""
+        if control is None:
+            return self._run(on_increment, None)
 
-    def _run(self, on_increment: Optional[Callable[[Increment], None]]) -> RunSummary:
+        # first in the guards: reached whatever the other guards find
+        def guard() -> str:
+            checkpoint(control, self.comm)
+            return ""
+        self.system.guards.insert(0, guard)
+        try:
+            return self._run(on_increment, control)
+        finally:
+            self.system.guards.remove(guard)
+
+    def _run(self, on_increment: Optional[Callable[[Increment], None]],
+             control: Optional[RunControl]) -> RunSummary:
         summary = self.summary
         start = time.perf_counter()
         for index, step in enumerate(self.problem.scene.steps):
@@ -285,7 +200,8 @@ class Solver:
             done = [0]  # converged increments of this step
 
             def load(tau: float, loading=loading, index=index, done=done) -> None:
-                interruption.where = (index, done[0] + 1)  # named if a signal stops the run
+                if control is not None:
+                    control.attempt(index, done[0] + 1)
                 values, self.system.f_ext = loading.at(tau)
                 self.system.prescribe(loading.rows, values)
                 for pair in self.problem.pairs.values():

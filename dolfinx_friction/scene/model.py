@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Optional, Sequence, Union
+from typing import Optional, Union
 
 from dolfinx_friction.scene import validation as v
 from dolfinx_friction.scene.validation import CALCULIX, Key, Rules, validate
@@ -239,10 +239,6 @@ class Scene:
 
     def body(self, name: str) -> Optional[Body]:
         return next((b for b in self.bodies if b.name == name), None)
-
-
-def as_vector(values: Sequence[float]) -> Vector:
-    return tuple(float(v) for v in values)
 
 
 #: The rules of each dataclass, by scene-file key in file order: checked when an object is

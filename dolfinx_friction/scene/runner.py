@@ -9,10 +9,10 @@ from typing import Callable, Optional, Sequence, Union
 
 from mpi4py import MPI
 
-from dolfinx_friction.errors import interruption
 from dolfinx_friction.scene.model import Scene
 from dolfinx_friction.io.writer import ResultWriter
 from dolfinx_friction.scene.build import ContactProblem
+from dolfinx_friction.scene.control import RunControl, checkpoint
 from dolfinx_friction.scene.provenance import provenance
 from dolfinx_friction.scene.toml import SceneError, default_output_dir, load_scene
 from dolfinx_friction.scene.driver import ConvergenceError, Increment, RunSummary, Solver
@@ -39,14 +39,17 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         overrides: Sequence[str] = (), write: bool = True,
         comm: MPI.Comm = MPI.COMM_WORLD, petsc_options: Optional[dict] = None,
         reuse_factorisation: Optional[bool] = None,
-        progress: Optional[Callable[[Increment], None]] = None) -> RunResult:
+        progress: Optional[Callable[[Increment], None]] = None,
+        control: Optional[RunControl] = None) -> RunResult:
     """Solve a scene (a :class:`Scene` or a scene file) and write its results.
 
     ``overrides`` (``KEY=VALUE`` as ``--set`` takes them) apply to a scene file only (a
     :class:`Scene` is changed with ``dataclasses.replace``); ``out`` overrides
     ``[output] dir``; ``write=False`` keeps everything in memory;
     ``progress`` is called with every converged increment once it is written (e.g. a
-    :class:`~dolfinx_friction.cli.progress.Progress`; on every rank where it is given).
+    :class:`~dolfinx_friction.cli.progress.Progress`; on every rank where it is given);
+    ``control`` (:mod:`~dolfinx_friction.scene.control`, on every rank) follows the run
+    and may stop it at a checkpoint (:class:`~dolfinx_friction.errors.Interrupted`).
     Nothing is printed: warnings (a penalty too soft for the mesh, nodes that slid off
     their master) and notices go to the ``dolfinx_friction`` logger, from rank 0;
     ``petsc_options`` (without prefix) set the linear solver; ``reuse_factorisation``
@@ -64,13 +67,13 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     problem = ContactProblem(scene, comm)
     solver = Solver(problem, petsc_options=petsc_options,
                     reuse_factorisation=reuse_factorisation)
-    solver.validate_steps()  # a bad later step is an input error, found before any output
     directory = Path(out) if out is not None else (scene.output.dir or default_output_dir(scene))
     writer = None
     if write:
         writer = ResultWriter(problem, solver.reaction_groups(), directory, scene.output.fields,
                               scene.output.contact_table)
-        interruption.directory = directory  # named by the line of an interrupted run
+    if control is not None:
+        control.begin(directory if write else None)
     solver.timers.add("setup", time.perf_counter() - start, time.process_time() - cpu)
     increments: list[Increment] = []
     warnings: dict[str, str] = {}
@@ -82,8 +85,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
                 log.warning(text)
 
     def record(inc: Increment) -> None:
-        # an increment that converges after a signal was announced naming it is not kept
-        interruption.checkpoint(comm)
+        # an increment that converges after the control was told to stop is not kept
+        checkpoint(control, comm)
         increments.append(inc)
         for pair, ratio in inc.penetration.items():
             if ratio > PENETRATION_WARNING:
@@ -94,18 +97,14 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
                 warn(pair + " detached", f"contact {pair}: {count} slave node(s) in contact slid "
                                          f"off the master surface at t = {inc.t:.4g}")
         if writer is not None:
-            # a signal from now on stops the run after this increment, which is written
-            # whole first (the line names the next one: of the next step at t = 1); then
-            # every rank stops here, all together
-            interruption.where = ((inc.step + 1, 1) if inc.t - inc.step > 1.0 - 1e-12
-                                  else (inc.step, inc.increment + 1))
-            interruption.writing = True
-            try:
-                with solver.timers.measure("output"):
-                    writer.increment(inc)
-            finally:
-                interruption.writing = False
-            interruption.checkpoint(comm)
+            # a stop asked from now on comes after this increment, which is written whole
+            # first: the run works on the next one (of the next step at t = 1)
+            if control is not None:
+                control.attempt(*((inc.step + 1, 1) if inc.t - inc.step > 1.0 - 1e-12
+                                  else (inc.step, inc.increment + 1)))
+            with solver.timers.measure("output"):
+                writer.increment(inc)
+            checkpoint(control, comm)  # every rank stops here, all together
         if progress is not None:
             progress(inc)
 
@@ -116,21 +115,13 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
                 "warnings": list(warnings.values())}
 
     try:
-        summary = solver.run(record)
+        summary = solver.run(record, control)
     except ConvergenceError:
         solver.summary.wall = time.perf_counter() - start
         if writer is not None:
-            interruption.writing = True  # (a signal now: the failure is still reported)
-            try:
-                writer.summary(solver.summary, extra())
-            finally:
-                interruption.writing = False
+            writer.summary(solver.summary, extra())
         raise
     summary.wall = time.perf_counter() - start
     if writer is not None:
-        interruption.writing = True  # all converged: a signal now only changes the exit status
-        try:
-            writer.summary(summary, extra())
-        finally:
-            interruption.writing = False
+        writer.summary(summary, extra())
     return RunResult(problem, summary, increments, directory if write else None)

@@ -45,14 +45,15 @@ if "DISPLAY" not in os.environ:  # off-screen pictures without an X server (VTK'
 import numpy as np  # noqa: E402
 import pyvista  # noqa: E402
 
+from dolfinx_friction.contact.element import OPEN, SLIP, STICK  # noqa: E402
+
 pyvista.OFF_SCREEN = True
 
 #: Colours of the bodies (cycled) and of the rigid obstacles.
 BODY_COLORS = ("#c9d6e3", "#e8dcc4", "#d5e8d4", "#e6d0de", "#f5e6b8")
 RIGID_COLOR = "#5a5a5a"
-#: Status colours: not in contact, stick, slip.
+#: Status colours: open (and no element), stick, slip.
 STATUS_COLORS = ("#b0b0b0", "#1f77b4", "#d62728")
-STATUS_LABELS = ("open", "stick", "slip")
 # corner nodes of each face type in cyclic order (face-type node numbering)
 _CORNERS = {"L2": [0, 1], "L3": [0, 1], "T3": [0, 1, 2], "T6": [0, 1, 2],
             "Q4": [0, 1, 3, 2], "Q9": [0, 1, 3, 2]}
@@ -88,32 +89,17 @@ def _problem_of(result):
 
 
 def _nodal_contact(problem, field) -> np.ndarray:
-    """(n_local_nodes, 2): contact pressure and a status code per node of a body.
-
-    Code 0: not a slave node; 1: slave node without contact (no element or
-    open); 2: stick; 3: slip.  Values of ghost nodes come from their owners.
-    """
+    """(n_local_nodes, 2): ``contact_pressure`` and ``status`` of the body's nodal contact
+    fields (:mod:`~dolfinx_friction.fem.contact_fields`), ghost nodes from their owners."""
     from dolfinx_friction import _compat as compat
-    from dolfinx_friction.contact.element import OPEN
 
-    d = problem.gdim
-    f = compat.function(field.V)
-    a = f.x.array.reshape(-1, d)
+    fields = problem.contact_fields(field)
+    f = compat.function(field.V)  # (gdim >= 2 components: room for both)
+    a = f.x.array.reshape(-1, problem.gdim)
     a[:] = 0.0
-    for contact in problem.scene.contacts:
-        if problem.group_fields(contact.slave)[0] is not field:
-            continue
-        st = problem.pair_of(contact).state()
-        a[st.nodes, 1] = np.maximum(a[st.nodes, 1], 1.0)
-        s = st.has_element
-        nodes = st.nodes[s]
-        closed = st.status[s] > OPEN
-        a[nodes[closed], 0] = st.pressure[s][closed]
-        a[nodes, 1] = 1.0 + st.status[s]
-    n = field.n_owned
-    a[n:] = 0.0
+    a[:, 0], a[:, 1] = fields["contact_pressure"][:, 0], fields["status"][:, 0]
     compat.scatter_forward(f)
-    return f.x.array.reshape(-1, d)[:, :2].copy()
+    return f.x.array.reshape(-1, problem.gdim)[:, :2].copy()
 
 
 def _facets(field, group: str) -> tuple[str, np.ndarray]:
@@ -170,7 +156,7 @@ def _local_pieces(problem, warp: float, amplify: str) -> dict:
                 continue
             _, corners = _facets(field, group)
             slaves.append(dict(body=field.body.name, group=group, x=x[corners],
-                               pressure=values[corners, 0], code=values[corners, 1],
+                               pressure=values[corners, 0], status=values[corners, 1],
                                X=_pad3(field.X[corners.ravel()]).reshape(corners.shape + (3,))))
         for group in sorted(master_groups):
             if field.mesh.groups.get(group) is None:
@@ -280,9 +266,10 @@ def _scalar_args(scalar: str, clim: tuple[float, float], bar: bool, title: str) 
                     position_y=0.05 if scalar == "status" else 0.02, title_font_size=16,
                     label_font_size=14, color="black")
     if scalar == "status":
-        return dict(common, cmap=_status_cmap(), clim=[0.5, 3.5], n_colors=3,
+        return dict(common, cmap=_status_cmap(), clim=[OPEN - 0.5, SLIP + 0.5], n_colors=3,
                     scalar_bar_args=dict(bar_args, n_labels=0),
-                    annotations={1.0: "open", 2.0: "stick", 3.0: "slip"})
+                    annotations={float(OPEN): "open", float(STICK): "stick",
+                                 float(SLIP): "slip"})
     return dict(common, cmap="plasma", clim=list(clim),
                 scalar_bar_args=dict(bar_args, fmt="%.3g", n_labels=5))
 
@@ -299,7 +286,7 @@ def render(result_or_problem, png_path: Union[str, Path], scalar: str = "contact
 
     ``result_or_problem``: a :class:`~dolfinx_friction.scene.runner.RunResult` or a
     :class:`~dolfinx_friction.scene.build.ContactProblem`.  ``scalar``:
-    ``"contact_pressure"`` (nodal ``F_N/A_p`` of the closed slave nodes, 0
+    ``"contact_pressure"`` (nodal ``F_N/A_p`` of the closed slave nodes, grey
     elsewhere on the slave surface) or ``"status"`` (open / stick / slip).
     ``warp``: scale of the displacements (rigid obstacles are translated by
     ``warp`` times their displacement, so that the picture stays consistent).
@@ -344,14 +331,15 @@ def draw(data: dict, gdim: int, png_path: Union[str, Path], scalar: str = "conta
     ``data``: ``bodies`` (per body: ``name``, VTK ``topology`` and ``cell_types`` of
     corner-node cells, deformed point coordinates ``x`` (n, 3), ``von_mises`` per cell),
     ``slaves`` (per slave facet group: ``body``, ``group``, deformed corner coordinates
-    ``x`` (n_facets, corners, 3), nodal ``pressure`` and status ``code`` (n_facets,
-    corners): 1 open or without element, 2 stick, 3 slip; 3D facets with outward
-    normals), ``masters`` (per master facet group: ``body``, ``group``, ``x``; may be
-    empty) and ``rigids`` (per obstacle: the :class:`~dolfinx_friction.scene.model.Rigid` and
-    its drawn translation ``U`` (3,) or None).  ``warp`` and ``amplify`` only label the
-    picture here (``x`` and ``U`` are already scaled); the other arguments as in
-    :func:`render`.  This is what :func:`render` draws for a live problem and what
-    ``dolfinx-friction render`` draws from the files of a run.
+    ``x`` (n_facets, corners, 3), nodal ``pressure`` and ``status`` (n_facets, corners)
+    in the codes of :mod:`~dolfinx_friction.fem.contact_fields`: -1 no element, 0 open,
+    1 stick, 2 slip; 3D facets with outward normals), ``masters`` (per master facet
+    group: ``body``, ``group``, ``x``; may be empty) and ``rigids`` (per obstacle: the
+    :class:`~dolfinx_friction.scene.model.Rigid` and its drawn translation ``U`` (3,) or
+    None).  ``warp`` and ``amplify`` only label the picture here (``x`` and ``U`` are
+    already scaled); the other arguments as in :func:`render`.  This is what
+    :func:`render` draws for a live problem and what ``dolfinx-friction render`` draws
+    from the files of a run.
     """
     png_path = Path(png_path)
     png_path.parent.mkdir(parents=True, exist_ok=True)
@@ -359,7 +347,7 @@ def draw(data: dict, gdim: int, png_path: Union[str, Path], scalar: str = "conta
     all_x = np.concatenate([b["x"] for b in data["bodies"]])
     bounds = np.stack([all_x.min(0), all_x.max(0)])
     centre = all_x.mean(0)
-    closed_pts = [s["x"].reshape(-1, 3)[s["code"].ravel() >= 2] for s in data["slaves"]]
+    closed_pts = [s["x"].reshape(-1, 3)[s["status"].ravel() >= STICK] for s in data["slaves"]]
     closed_pts = np.concatenate(closed_pts) if closed_pts else np.zeros((0, 3))
     if panels is None:
         panels = ("overview", "contact") if len(closed_pts) else ("overview",)
@@ -367,7 +355,7 @@ def draw(data: dict, gdim: int, png_path: Union[str, Path], scalar: str = "conta
     if clim is None:
         pmax = float(pressures.max()) if pressures.size else 0.0
         clim = (0.0, pmax if pmax > 0 else 1.0)
-    values_key = "code" if scalar == "status" else "pressure"
+    values_key = "status" if scalar == "status" else "pressure"
     bar_title = "status" if scalar == "status" else "contact pressure"
 
     if window_size is None:
@@ -435,10 +423,10 @@ def draw(data: dict, gdim: int, png_path: Union[str, Path], scalar: str = "conta
             poly = _facet_polydata(s["x"] + lift)
             values = s[values_key].ravel().astype(float)
             if scalar == "contact_pressure":  # nodes not in contact: grey
-                values = np.where(s["code"].ravel() >= 2, values, np.nan)
+                values = np.where(s["status"].ravel() >= STICK, values, np.nan)
                 poly.point_data[bar_title] = values
             else:  # categories are not interpolated: a facet takes its weakest corner's state
-                poly.cell_data[bar_title] = s["code"].min(axis=1).astype(float)
+                poly.cell_data[bar_title] = s["status"].min(axis=1).astype(float)
             args = _scalar_args(scalar, clim, first_bar, bar_title)
             first_bar = False
             if gdim == 2:
@@ -450,10 +438,7 @@ def draw(data: dict, gdim: int, png_path: Union[str, Path], scalar: str = "conta
                             **args)
             if close_up or gdim == 2:
                 pts = pyvista.PolyData(s["x"].reshape(-1, 3) + 2 * lift)
-                pts.point_data[bar_title] = values
-                keep = s["code"].ravel() >= 1
-                pts = pts.extract_points(np.flatnonzero(keep), adjacent_cells=False) \
-                    if keep.any() else pts
+                pts.point_data[bar_title] = values  # every node of a slave facet
                 pl.add_mesh(pts, scalars=bar_title, render_points_as_spheres=True,
                             point_size=14 if close_up else 10,
                             **dict(_scalar_args(scalar, clim, False, bar_title)))
@@ -527,7 +512,7 @@ def mean_normal(slaves: list[dict]) -> np.ndarray:
         if x.shape[1] < 3:
             continue
         m = np.cross(x[:, 1] - x[:, 0], x[:, -1] - x[:, 0])
-        closed = (s["code"] >= 2).any(axis=1)
+        closed = (s["status"] >= STICK).any(axis=1)
         normals.append(m[closed] if closed.any() else m)
     if not normals:
         return np.array([0.0, 0.0, -1.0])

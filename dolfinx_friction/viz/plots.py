@@ -22,7 +22,8 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from dolfinx_friction.io.reader import ResultsError, RunFiles, read_csv, write_atomic
+from dolfinx_friction.io.files import write_atomic
+from dolfinx_friction.io.reader import ResultsError, RunFiles, read_csv
 
 __all__ = ["plot_history", "plot_sweep"]
 

@@ -23,7 +23,6 @@ in the live picture.
 from __future__ import annotations
 
 import logging
-import os
 from pathlib import Path
 from typing import Optional, Union
 
@@ -31,6 +30,7 @@ from dolfinx_friction.viz import pictures as viz  # noqa: I001  (pyvista before 
 import numpy as np
 import pyvista
 
+from dolfinx_friction.io.files import atomic_path
 from dolfinx_friction.io.reader import ResultsError, RunFiles, read_run
 from dolfinx_friction.scene.model import Scene
 from dolfinx_friction.scene.toml import SceneError, load_scene
@@ -140,7 +140,7 @@ def _body_data(name: str, grid: pyvista.UnstructuredGrid, warp: float, amplify: 
     pressure = np.asarray(grid.point_data["contact_pressure"], dtype=float).ravel()
     s, m = facets[slave], facets[~slave]
     slaves = dict(body=name, group=f"{name} contact surface", x=x[s], pressure=pressure[s],
-                  code=status[s] + 1, X=X[s]) if len(s) else None
+                  status=status[s], X=X[s]) if len(s) else None
     others = dict(body=name, group=f"{name} boundary", x=x[m]) if len(m) else None
     return _GDIM[kind], body, slaves, others
 
@@ -232,11 +232,7 @@ def render_files(directory: Union[str, Path], png_path: Union[str, Path, None] =
     png_path = Path(png_path) if png_path is not None else \
         run.directory / f"{folder.name.replace('step', 'render_step', 1)}.png"
     png_path.parent.mkdir(parents=True, exist_ok=True)
-    partial = png_path.with_name(f".{png_path.stem}.partial.png")
-    try:
+    with atomic_path(png_path) as partial:
         viz.draw(data, gdim, partial, scalar=scalar, warp=warp, amplify=amplify, title=title,
                  body_scalar=body_scalar)
-        os.replace(partial, png_path)
-    finally:
-        partial.unlink(missing_ok=True)
     return png_path, run, k

@@ -37,7 +37,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from tests import meshes
+from dolfinx_friction.reference import meshes
 
 pytestmark = pytest.mark.skipif(
     MPI.COMM_WORLD.size > 1,
@@ -217,21 +217,21 @@ BASES = {"good": GOOD, "rigid": RIGID, "planar": PLANAR}
 
 
 def _block_with_edge(path: Path) -> Path:
-    """tests.meshes.block_3d (2x2x1 hexahedra) plus the edge group ``edge_x0y0``."""
+    """reference.meshes.block_3d (2x2x1 hexahedra) plus the edge group ``edge_x0y0``."""
     import gmsh
 
     def build():
-        box = meshes._box(0, 0, 0, 1, 1, 0.5)
-        meshes._mesh_boxes([(box, (2, 2, 1))])
-        meshes._group(3, [box], "block")
-        meshes._group(2, meshes._boundary(3, box, 2, 0.0), "bottom")
-        meshes._group(2, meshes._boundary(3, box, 2, 0.5), "top")
-        meshes._group(2, meshes._boundary(3, box, 0, 0.0), "side_x0")
-        meshes._group(2, meshes._boundary(3, box, 1, 0.0), "side_y0")
+        box = meshes.box(0, 0, 0, 1, 1, 0.5)
+        meshes.mesh_boxes([(box, (2, 2, 1))])
+        meshes.group(3, [box], "block")
+        meshes.group(2, meshes.boundary(3, box, 2, 0.0), "bottom")
+        meshes.group(2, meshes.boundary(3, box, 2, 0.5), "top")
+        meshes.group(2, meshes.boundary(3, box, 0, 0.0), "side_x0")
+        meshes.group(2, meshes.boundary(3, box, 1, 0.0), "side_y0")
         edges = [t for _, t in gmsh.model.getEntities(1)
                  if max(abs(c) for c in gmsh.model.occ.getCenterOfMass(1, t)[:2]) < 1e-9]
-        meshes._group(1, edges, "edge_x0y0")
-    return meshes._write(build, path)
+        meshes.group(1, edges, "edge_x0y0")
+    return meshes.write_model(build, path)
 
 
 def _with_empty_group(path: Path) -> Path:
@@ -239,12 +239,12 @@ def _with_empty_group(path: Path) -> Path:
     import gmsh
 
     def build():
-        box = meshes._box(0, 0, 0, 1, 1, 1)
-        meshes._mesh_boxes([(box, (1, 1, 1))])
-        meshes._group(3, [box], "block")
-        meshes._group(2, meshes._boundary(3, box, 2, 0.0), "bottom")
-        meshes._group(2, [gmsh.model.addDiscreteEntity(2)], "empty_group")
-    return meshes._write(build, path)
+        box = meshes.box(0, 0, 0, 1, 1, 1)
+        meshes.mesh_boxes([(box, (1, 1, 1))])
+        meshes.group(3, [box], "block")
+        meshes.group(2, meshes.boundary(3, box, 2, 0.0), "bottom")
+        meshes.group(2, [gmsh.model.addDiscreteEntity(2)], "empty_group")
+    return meshes.write_model(build, path)
 
 
 def _without_names(path: Path) -> Path:
@@ -252,28 +252,28 @@ def _without_names(path: Path) -> Path:
     import gmsh
 
     def build():
-        box = meshes._box(0, 0, 0, 1, 1, 1)
-        meshes._mesh_boxes([(box, (1, 1, 1))])
+        box = meshes.box(0, 0, 0, 1, 1, 1)
+        meshes.mesh_boxes([(box, (1, 1, 1))])
         gmsh.model.addPhysicalGroup(3, [box])
-        gmsh.model.addPhysicalGroup(2, meshes._boundary(3, box, 2, 0.0))
-    return meshes._write(build, path)
+        gmsh.model.addPhysicalGroup(2, meshes.boundary(3, box, 2, 0.0))
+    return meshes.write_model(build, path)
 
 
 def _spanning_group(path: Path) -> Path:
-    """tests.meshes.two_boxes (coarse) plus ``both_bottoms``: a facet group on both bodies."""
+    """reference.meshes.two_boxes (coarse) plus ``both_bottoms``: a facet group on both bodies."""
     def build():
-        f = meshes._box(0, 0, 0, 1, 1, 0.5)
-        b = meshes._box(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
-        meshes._mesh_boxes([(f, (2, 2, 1)), (b, (1, 1, 1))])
-        meshes._group(3, [f], "foundation")
-        meshes._group(3, [b], "block")
-        meshes._group(2, meshes._boundary(3, f, 2, 0.0), "foundation_bottom")
-        meshes._group(2, meshes._boundary(3, f, 2, 0.5), "foundation_top")
-        meshes._group(2, meshes._boundary(3, b, 2, 0.5), "block_bottom")
-        meshes._group(2, meshes._boundary(3, b, 2, 0.75), "block_top")
-        meshes._group(2, meshes._boundary(3, b, 2, 0.5) + meshes._boundary(3, f, 2, 0.0),
+        f = meshes.box(0, 0, 0, 1, 1, 0.5)
+        b = meshes.box(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
+        meshes.mesh_boxes([(f, (2, 2, 1)), (b, (1, 1, 1))])
+        meshes.group(3, [f], "foundation")
+        meshes.group(3, [b], "block")
+        meshes.group(2, meshes.boundary(3, f, 2, 0.0), "foundation_bottom")
+        meshes.group(2, meshes.boundary(3, f, 2, 0.5), "foundation_top")
+        meshes.group(2, meshes.boundary(3, b, 2, 0.5), "block_bottom")
+        meshes.group(2, meshes.boundary(3, b, 2, 0.75), "block_top")
+        meshes.group(2, meshes.boundary(3, b, 2, 0.5) + meshes.boundary(3, f, 2, 0.0),
                       "both_bottoms")
-    return meshes._write(build, path)
+    return meshes.write_model(build, path)
 
 
 def _split_block(path: Path) -> Path:
@@ -282,16 +282,16 @@ def _split_block(path: Path) -> Path:
     import gmsh
 
     def build():
-        a = meshes._box(0, 0, 0, 1, 1, 0.5)
-        b = meshes._box(0, 0, 0.5, 1, 1, 0.5)
+        a = meshes.box(0, 0, 0, 1, 1, 0.5)
+        b = meshes.box(0, 0, 0.5, 1, 1, 0.5)
         gmsh.model.occ.fragment([(3, a)], [(3, b)])
         gmsh.model.occ.synchronize()
-        meshes._mesh_boxes([(a, (1, 1, 1)), (b, (1, 1, 1))])
-        meshes._group(3, [a, b], "block")
-        meshes._group(2, meshes._boundary(3, a, 2, 0.0), "bottom")
-        meshes._group(2, meshes._boundary(3, a, 2, 0.5), "middle")
-        meshes._group(2, meshes._boundary(3, b, 2, 1.0), "top")
-    return meshes._write(build, path)
+        meshes.mesh_boxes([(a, (1, 1, 1)), (b, (1, 1, 1))])
+        meshes.group(3, [a, b], "block")
+        meshes.group(2, meshes.boundary(3, a, 2, 0.0), "bottom")
+        meshes.group(2, meshes.boundary(3, a, 2, 0.5), "middle")
+        meshes.group(2, meshes.boundary(3, b, 2, 1.0), "top")
+    return meshes.write_model(build, path)
 
 
 def _moved_node(source: Path, path: Path, where: tuple, to: tuple) -> None:

@@ -25,7 +25,7 @@ from dolfinx_friction.nls import newton as newton_module
 from dolfinx_friction.scene.runner import run
 from dolfinx_friction.scene.toml import load_scene
 from dolfinx_friction.scene.driver import ConvergenceError
-from tests import meshes
+from dolfinx_friction.reference import meshes
 from tests.cli.test_cli import GOOD, RIGID, edited, toml_dumps
 
 COMM = MPI.COMM_WORLD

@@ -31,7 +31,7 @@ from mpi4py import MPI
 
 import dolfinx_friction
 from dolfinx_friction.contact.laws import Linear
-from tests import meshes
+from dolfinx_friction.reference import meshes
 from tests.cli.test_cli import TIMEOUT, cli, cli_env, mpirun_cli, read_csv
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,

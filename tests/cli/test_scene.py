@@ -18,7 +18,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dolfinx_friction.errors import EXIT_INPUT, classify
+from dolfinx_friction.cli.exits import EXIT_INPUT, classify
 from dolfinx_friction.scene.model import (
     BC,
     Body,

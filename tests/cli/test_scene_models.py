@@ -15,7 +15,7 @@ from dolfinx_friction.scene.runner import run
 from dolfinx_friction.scene.model import BC, Body, ContactPair, Load, Rigid, Scene, Step
 from dolfinx_friction.reference.compare import contact_state
 from dolfinx_friction.scene.toml import SceneError, parse_scene
-from tests import meshes
+from dolfinx_friction.reference import meshes
 from tests.cli.test_scene import edited, put
 from tests.verification.test_finite_strain import E, NU, nominal_stress
 
@@ -59,7 +59,7 @@ def test_pressure_follows_the_deformed_face(shared_dir, follower):
         steps=(Step("squeeze", increments=4, bcs=(BC("left", (0.0, None)),), loads=(load,)),))
     result = run(scene, write=False)
     state = contact_state(result)
-    carried = state["F_N"].sum()
+    carried = state["normal_force"].sum()
     # the homogeneous state: lateral stretch a, axial b with P_11 = 0 and P_22 = -p a (or -p)
     def residual(a):
         b = brentq(lambda b: nominal_stress("neo-hookean", [a, b, 1.0], 1)

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from tests import meshes
+from dolfinx_friction.reference import meshes
 from tests.cli.test_cli import (GOOD, _PYCACHE, Outcome, assert_one_line_error, cli, cli_env,
                                 edited, mpirun_cli, read_csv, toml_dumps)
 

@@ -10,7 +10,7 @@ import pytest
 
 from dolfinx_friction.scene.runner import run
 from dolfinx_friction.scene.model import BC, Body, ContactPair, Rigid, Scene, Step
-from tests import meshes
+from dolfinx_friction.reference import meshes
 
 
 def _press(mesh, body: Body, rigid: Rigid, u: tuple, mu: float = 0.2) -> Scene:

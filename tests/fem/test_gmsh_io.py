@@ -25,8 +25,8 @@ import dolfinx.mesh  # noqa: E402
 import ufl  # noqa: E402
 
 from dolfinx_friction import _compat as compat  # noqa: E402
-from dolfinx_friction.io.gmsh import (  # noqa: E402
-    BodyMesh, MeshError, MeshSet, _gmsh_initialized, load_mesh)
+from dolfinx_friction.io.gmsh import BodyMesh, MeshError, MeshSet, load_mesh  # noqa: E402
+from dolfinx_friction.io.msh import gmsh_initialized  # noqa: E402
 
 comm = MPI.COMM_WORLD
 ROOT = comm.rank == 0
@@ -244,7 +244,7 @@ def test_two_boxes_live_model(cell, order):
         info = on_root(build_boxes, cell, order)
         ms = load_mesh(gmsh, ["lower", "upper"], comm)
         if ROOT:  # a live model is left alone
-            assert _gmsh_initialized(gmsh)
+            assert gmsh_initialized(gmsh)
             assert gmsh.model.getCurrent() == f"boxes_{cell}{order}"
     check_boxes(ms, info, cell, order)
 
@@ -340,7 +340,7 @@ def test_msh_versions(shared_dir, version):
     info = on_root(make)
     ms = load_mesh(path, ["lower", "upper"], comm)
     if ROOT:
-        assert not _gmsh_initialized(gmsh)  # initialized by load_mesh -> finalized again
+        assert not gmsh_initialized(gmsh)  # initialized by load_mesh -> finalized again
     check_boxes(ms, info, "tet", 1)
 
 
@@ -357,7 +357,7 @@ def test_file_keeps_user_gmsh_session(shared_dir):
         comm.barrier()
         ms = load_mesh(str(path), ["lower", "upper"], comm)
         if ROOT:
-            assert _gmsh_initialized(gmsh)
+            assert gmsh_initialized(gmsh)
             assert gmsh.model.getCurrent() == "mine"
             assert sorted(gmsh.model.list()) == models
             assert gmsh.option.getNumber("General.Terminal") == 1
@@ -426,7 +426,7 @@ def test_corrupt_file(shared_dir):
     comm.barrier()
     expect_error(path, ["a"], r"corrupt\.msh.*cannot be read")
     if ROOT:
-        assert not _gmsh_initialized(gmsh)
+        assert not gmsh_initialized(gmsh)
 
 
 def test_geo_script_is_not_run(shared_dir):

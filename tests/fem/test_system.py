@@ -16,7 +16,7 @@ from dolfinx_friction.scene.model import (BC, Body, ContactPair, Load, Rigid, Ri
 from dolfinx_friction.scene.build import ContactProblem
 from dolfinx_friction.scene.driver import Solver
 from dolfinx_friction.fem.surfaces import SlaveNodes, master_faces
-from tests import meshes
+from dolfinx_friction.reference import meshes
 
 
 def _csr_rows(A: PETSc.Mat, N: int) -> np.ndarray:

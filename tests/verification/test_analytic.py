@@ -68,5 +68,5 @@ def test_cattaneo_mindlin_stick_zone():
     c, _, spacing = stick_half_width(st["X"][closed, 0], st["status"][closed])
     assert abs(c - cattaneo_mindlin_stick_half_width(a, Q, 0.3, P)) <= spacing
     slip = st["status"] == 2
-    ratio = np.linalg.norm(st["F_T"][slip], axis=1) / (0.3 * st["F_N"][slip])
+    ratio = np.linalg.norm(st["tangential_force"][slip], axis=1) / (0.3 * st["normal_force"][slip])
     np.testing.assert_allclose(ratio, 1.0, rtol=1e-10)

@@ -8,7 +8,7 @@ from dolfinx_friction.scene.runner import run
 from dolfinx_friction.contact.laws import Linear
 from dolfinx_friction.scene.model import BC, Body, ContactPair, Load, Rigid, Scene, Step
 from dolfinx_friction.reference.compare import contact_state
-from tests import meshes
+from dolfinx_friction.reference import meshes
 
 E, NU = 1000.0, 0.3
 
@@ -51,9 +51,9 @@ def test_uniform_pressure_penetration(shared_dir):
                     loads=(Load("top", pressure=p),)),))
     result = run(scene, write=False)
     state = contact_state(result)
-    pressure, gaps = state["pressure"], state["g_N"]
+    pressure, gaps = state["pressure"], state["gap"]
     assert len(pressure) == 9
-    assert state["F_N"].sum() == pytest.approx(p * 1.0, rel=1e-9)
+    assert state["normal_force"].sum() == pytest.approx(p * 1.0, rel=1e-9)
     np.testing.assert_allclose(pressure, pressure.mean(), rtol=1e-9)
     assert pressure.mean() == pytest.approx(p / (1 + NU * (1 + NU) * p / (2 * E)), rel=1e-6)
     law_p, _ = Linear(K, sigma_inf).pressure(-gaps)

@@ -47,6 +47,7 @@ import pytest
 from mpi4py import MPI
 
 from dolfinx_friction.reference import calculix
+from dolfinx_friction.reference.meshes import blocks_on_foundation, write_model
 from dolfinx_friction.scene.model import BC, Body, Load, Rigid, Scene, Step
 
 comm = MPI.COMM_WORLD
@@ -63,83 +64,30 @@ TOL = 0.01  # the issue's 1 %: |R - R_ccx| <= TOL |R_ccx| per group and incremen
 # --------------------------------------------------------------------------- meshes
 
 
-def _blocks_mesh(path: Path, n_foundation: int = 5, n_block: int = 4, tets: bool = False) -> Path:
-    """Block [0.25,0.75]^2 x [0.5,0.75] on foundation [0,1]^2 x [0,0.5] (not fragmented:
-    the bodies do not share nodes), structured hexahedra or tetrahedra.
-
-    Groups: ``block``, ``foundation``; ``block_bottom``, ``block_top``,
-    ``foundation_top``, ``foundation_bottom``.  Adapted from the end-to-end
-    example scene's ``mk.py``.
-    """
-    if ROOT:
-        import gmsh
-        gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
-        try:
-            gmsh.model.add("blocks")
-            occ = gmsh.model.occ
-            f = occ.addBox(0, 0, 0, 1, 1, 0.5)
-            b = occ.addBox(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
-            occ.synchronize()
-            for vol, n in ((f, n_foundation), (b, n_block)):
-                surfaces = gmsh.model.getBoundary([(3, vol)], combined=False, oriented=False)
-                for _, curve in gmsh.model.getBoundary(surfaces, combined=False, oriented=False):
-                    gmsh.model.mesh.setTransfiniteCurve(abs(curve), n + 1)
-                for _, s in surfaces:
-                    gmsh.model.mesh.setTransfiniteSurface(s)
-                    if not tets:
-                        gmsh.model.mesh.setRecombine(2, s)
-                gmsh.model.mesh.setTransfiniteVolume(vol)
-
-            def face(vol, z):
-                return [t for _, t in gmsh.model.getBoundary([(3, vol)], oriented=False)
-                        if abs(occ.getCenterOfMass(2, t)[2] - z) < 1e-9]
-
-            for dim, tags, name in ((3, [f], "foundation"), (3, [b], "block"),
-                                    (2, face(f, 0.0), "foundation_bottom"),
-                                    (2, face(f, 0.5), "foundation_top"),
-                                    (2, face(b, 0.5), "block_bottom"),
-                                    (2, face(b, 0.75), "block_top")):
-                gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
-            gmsh.model.mesh.generate(3)
-            gmsh.write(str(path))
-        finally:
-            gmsh.finalize()
-    comm.barrier()
-    return path
-
-
 def _cube_mesh(path: Path, n: int = 3, tets: bool = False) -> Path:
     """Unit cube, body ``cube``, facet groups ``x0``, ``x1``, ``y0``, ``y1``, ``z0``, ``z1``."""
-    if ROOT:
-        import gmsh
-        gmsh.initialize()
-        gmsh.option.setNumber("General.Terminal", 0)
-        try:
-            gmsh.model.add("cube")
-            box = gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
-            gmsh.model.occ.synchronize()
-            if tets:  # unstructured: every face number of C3D4 occurs on the boundary
-                gmsh.option.setNumber("Mesh.MeshSizeMax", 1.0 / n)
-            else:
-                for _, c in gmsh.model.getEntities(1):
-                    gmsh.model.mesh.setTransfiniteCurve(c, n + 1)
-                for _, s in gmsh.model.getEntities(2):
-                    gmsh.model.mesh.setTransfiniteSurface(s)
-                    gmsh.model.mesh.setRecombine(2, s)
-                gmsh.model.mesh.setTransfiniteVolume(box)
-            gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [box]), "cube")
+    import gmsh
+
+    def build():
+        box = gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        if tets:  # unstructured: every face number of C3D4 occurs on the boundary
+            gmsh.option.setNumber("Mesh.MeshSizeMax", 1.0 / n)
+        else:
+            for _, c in gmsh.model.getEntities(1):
+                gmsh.model.mesh.setTransfiniteCurve(c, n + 1)
             for _, s in gmsh.model.getEntities(2):
-                c = gmsh.model.occ.getCenterOfMass(2, s)
-                axis = int(np.argmin([min(abs(v), abs(v - 1)) for v in c]))
-                name = "xyz"[axis] + ("0" if c[axis] < 0.5 else "1")
-                gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [s]), name)
-            gmsh.model.mesh.generate(3)
-            gmsh.write(str(path))
-        finally:
-            gmsh.finalize()
-    comm.barrier()
-    return path
+                gmsh.model.mesh.setTransfiniteSurface(s)
+                gmsh.model.mesh.setRecombine(2, s)
+            gmsh.model.mesh.setTransfiniteVolume(box)
+        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [box]), "cube")
+        for _, s in gmsh.model.getEntities(2):
+            c = gmsh.model.occ.getCenterOfMass(2, s)
+            axis = int(np.argmin([min(abs(v), abs(v - 1)) for v in c]))
+            name = "xyz"[axis] + ("0" if c[axis] < 0.5 else "1")
+            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [s]), name)
+        gmsh.model.mesh.generate(3)
+    return write_model(build, path, comm)
 
 
 # --------------------------------------------------------------------------- helpers
@@ -214,7 +162,7 @@ def test_block_on_foundation_matches_calculix(shared_dir, cells, mu):
     from dolfinx_friction.scene.runner import run
     from dolfinx_friction.scene.toml import load_scene
 
-    _blocks_mesh(shared_dir / "blocks.msh", tets=cells == "tet")
+    blocks_on_foundation(shared_dir / "blocks.msh", tets=cells == "tet")
     scene = load_scene(_scene_toml(shared_dir, mu))
     ccx, ccx_wall = _run_ccx(scene, shared_dir / "blocks.inp")
     t0 = time.perf_counter()

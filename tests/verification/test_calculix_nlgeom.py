@@ -60,9 +60,12 @@ import pytest
 from mpi4py import MPI
 
 from dolfinx_friction.reference import calculix
-from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Scene, Step
+from dolfinx_friction.reference.cases import (E, NU, ironing_figures, ironing_scene,
+                                              press_shear_scene)
+from dolfinx_friction.reference.meshes import blocks_on_foundation, ironing
+from dolfinx_friction.scene.model import Scene
 
-from .test_calculix import _blocks_mesh, _compare
+from .test_calculix import _compare
 
 comm = MPI.COMM_WORLD
 pytestmark = pytest.mark.skipif(comm.size > 1, reason="the CalculiX comparisons at finite "
@@ -71,7 +74,6 @@ needs_ccx = pytest.mark.skipif(not calculix.ccx_available(), reason="CalculiX is
                                "(no 'ccx' on the PATH; Debian/Ubuntu: apt-get install "
                                "calculix-ccx; or set $CCX)")
 
-E, NU = 1000.0, 0.3
 TOL_PRESS_SHEAR = 2e-3  # measured 9.1e-4
 # measured: 2.3e-4, 1.1e-3, 2.4e-4
 TOL_IRON_PRESS, TOL_IRON_SLIDE, TOL_IRON_RATIO = 1e-3, 5e-3, 0.002
@@ -95,24 +97,9 @@ def _ours_and_ccx(scene: Scene, inp):
     return result, ccx, wall
 
 
-def press_shear_scene(mesh, block_model: str = "neo-hookean", depth: float = 0.3 * 0.25,
-                      shear: float = 0.09, shear_increments: int = 6) -> Scene:
-    return Scene(
-        mesh=mesh,
-        bodies=(Body("block", E, NU, model=block_model), Body("foundation", 100 * E, NU)),
-        contacts=(ContactPair("block_bottom", "foundation_top", mu=0.3, K="calculix",
-                              stick_slope=20 * E),),
-        steps=(Step("press", increments=4, bcs=(BC("foundation_bottom", (0.0, 0.0, 0.0)),
-                                                 BC("block_top", (0.0, 0.0, -depth)))),
-               Step("shear", increments=shear_increments,
-                    bcs=(BC("block_top", (shear, 0.0, -depth)),))),
-        output=Output(reactions=("block_top", "foundation_bottom"), fields=False),
-        title="Neo-Hookean block pressed by 30 % and sheared (CalculiX NLGEOM comparison)")
-
-
 def test_deck_at_finite_strain(tmp_path):
     """NLGEOM on every step iff a body is finite-strain; the material cards of each model."""
-    mesh = _blocks_mesh(tmp_path / "blocks.msh")
+    mesh = blocks_on_foundation(tmp_path / "blocks.msh")
     mu, kappa = E / (2 * (1 + NU)), E / (3 * (1 - 2 * NU))
     for block, cards in (("neo-hookean", ["*HYPERELASTIC, NEO HOOKE",
                                           f"{0.5 * mu!r}, {2 / kappa!r}"]),
@@ -138,7 +125,7 @@ def test_deck_at_finite_strain(tmp_path):
 def test_neo_hookean_press_and_shear_matches_calculix(tmp_path):
     """Press by 30 % (4 increments), shear with partial slip (6): reactions of both groups
     within 2e-3 of CalculiX's in every increment (measured 9.1e-4)."""
-    scene = press_shear_scene(_blocks_mesh(tmp_path / "blocks.msh"))
+    scene = press_shear_scene(blocks_on_foundation(tmp_path / "blocks.msh"))
     result, ccx, wall = _ours_and_ccx(scene, tmp_path / "press_shear.inp")
     rows, worst = _compare(result.increments, ccx.reactions)
     summary = f"worst |dR|/|R| = {worst:.2e}; wall time: ours {wall:.2f} s, ccx {ccx.wall:.2f} s"
@@ -155,145 +142,13 @@ def test_neo_hookean_press_and_shear_matches_calculix(tmp_path):
 # --------------------------------------------------------------------------- ironing
 
 
-def ironing_mesh(path, length: float = 10.0, height: float = 5.0, radius: float = 2.0,
-                 x0: float = 3.0, nx: int = 40, ny: int = 6, bias: float = 0.75,
-                 n_arc: int = 32, thickness=None, dim: int = 3):
-    """The plane-strain ironing geometry, structured: one layer of hexahedra (``dim = 3``)
-    or its quadrilaterals (``dim = 2``: the same nodes as the hexahedra's face z = 0).
-
-    Block ``[0, length] x [0, height]`` (``nx`` x ``ny`` cells, rows graded by ``bias``
-    towards the top), half-disk die of ``radius`` centred at ``(x0, height + radius)``
-    with its flat top there, as an O-grid (a core square and three patches under the
-    arc, ``n_arc`` faces along the arc); in 3D extruded by one layer of ``thickness``
-    (default ``length / nx``) along z.  Groups: ``block``, ``die``; ``block_top``,
-    ``block_bottom``, ``die_surface`` (the arc), ``die_top``; in 3D also ``block_faces``
-    and ``die_faces`` (z = 0 and z = thickness).
-    """
-    import math
-
-    import gmsh
-    gmsh.initialize()
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        gmsh.model.add("ironing_one_layer" if dim == 3 else "ironing_2d")
-        geo = gmsh.model.geo
-        t = thickness if thickness is not None else length / nx
-        p = [geo.addPoint(0, 0, 0), geo.addPoint(length, 0, 0), geo.addPoint(length, height, 0),
-             geo.addPoint(0, height, 0)]
-        bottom, right, top, left = (geo.addLine(p[0], p[1]), geo.addLine(p[1], p[2]),
-                                    geo.addLine(p[2], p[3]), geo.addLine(p[3], p[0]))
-        block = geo.addPlaneSurface([geo.addCurveLoop([bottom, right, top, left])])
-        cx, cy, R = x0, height + radius, radius
-        s, q = R / 2, R / math.sqrt(2)
-        o = geo.addPoint(cx, cy, 0)
-        A, B, C, D = (geo.addPoint(cx - R, cy, 0), geo.addPoint(cx - q, cy - q, 0),
-                      geo.addPoint(cx + q, cy - q, 0), geo.addPoint(cx + R, cy, 0))
-        a, b, c, d = (geo.addPoint(cx - s, cy, 0), geo.addPoint(cx - s, cy - s, 0),
-                      geo.addPoint(cx + s, cy - s, 0), geo.addPoint(cx + s, cy, 0))
-        arcs = geo.addCircleArc(A, o, B), geo.addCircleArc(B, o, C), geo.addCircleArc(C, o, D)
-        Bb, Cc, Dd, Aa = geo.addLine(B, b), geo.addLine(C, c), geo.addLine(D, d), geo.addLine(A, a)
-        ab, bc, cd, da = geo.addLine(a, b), geo.addLine(b, c), geo.addLine(c, d), geo.addLine(d, a)
-        loops = {"core": [ab, bc, cd, da], "left": [arcs[0], Bb, -ab, -Aa],
-                 "bottom": [arcs[1], Cc, -bc, -Bb], "right": [arcs[2], Dd, -cd, -Cc]}
-        die = {k: geo.addPlaneSurface([geo.addCurveLoop(v)]) for k, v in loops.items()}
-        m = geo.mesh
-        m.setTransfiniteCurve(bottom, nx + 1)
-        m.setTransfiniteCurve(top, nx + 1)
-        m.setTransfiniteCurve(right, ny + 1, "Progression", bias)  # upwards: thinner rows
-        m.setTransfiniteCurve(left, ny + 1, "Progression", 1.0 / bias)
-        n1 = max(1, n_arc // 4)
-        n2 = max(1, n_arc - 2 * n1)
-        for curve, n in ((arcs[0], n1), (arcs[2], n1), (ab, n1), (cd, n1), (arcs[1], n2),
-                         (bc, n2), (da, n2), (Bb, n1), (Cc, n1), (Dd, n1), (Aa, n1)):
-            m.setTransfiniteCurve(curve, n + 1)
-        sources = [block, *die.values()]
-        for surface in sources:
-            m.setTransfiniteSurface(surface)
-            m.setRecombine(2, surface)
-        # the 2D entities themselves, or (3D) what the extrusion makes of them
-        body, side = {x: x for x in sources}, {}
-        if dim == 3:
-            ext = geo.extrude([(2, x) for x in sources], 0, 0, t, numElements=[1],
-                              recombine=True)
-            # per source surface: its copy at z = t, the volume, the lateral surfaces
-            copies = []
-            for k, (src, curves) in enumerate(zip(sources, [[bottom, right, top, left],
-                                                             *loops.values()])):
-                chunk = ext[6 * k:6 * k + 6]
-                copies.append(chunk[0][1])
-                body[src] = chunk[1][1]
-                for curve, (_, lat) in zip(curves, chunk[2:]):
-                    side.setdefault(abs(curve), lat)
-        geo.synchronize()
-
-        def group(d, tags, name):
-            gmsh.model.setPhysicalName(d, gmsh.model.addPhysicalGroup(d, tags), name)
-
-        def facets(curves):
-            return [side.get(abs(c), abs(c)) for c in curves]
-
-        group(dim, [body[block]], "block")
-        group(dim, [body[x] for x in die.values()], "die")
-        group(dim - 1, facets([top]), "block_top")
-        group(dim - 1, facets([bottom]), "block_bottom")
-        if dim == 3:
-            group(2, [block, copies[0]], "block_faces")
-        group(dim - 1, facets(arcs), "die_surface")
-        group(dim - 1, facets([Aa, da, Dd]), "die_top")
-        if dim == 3:
-            group(2, [*die.values(), *copies[1:]], "die_faces")
-        gmsh.model.mesh.generate(dim)
-        types = list(gmsh.model.mesh.getElementTypes(dim))
-        assert types == [5 if dim == 3 else 3], f"not all hexahedra / quadrilaterals: {types}"
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return path
-
-
-def ironing_scene(mesh, block_model: str = "neo-hookean", depth: float = 1.25,
-                  drag: float = 1.5, press_increments: int = 4,
-                  drag_increments: int = 12, dim: int = 3) -> Scene:
-    """The plane-strain ironing on a mesh of :func:`ironing_mesh` of dimension ``dim``
-    (3: one layer, ``u_z = 0`` on both faces)."""
-    def u(*c):
-        return c + (0.0,) if dim == 3 else c
-
-    plane = ((BC("block_faces", (None, None, 0.0)), BC("die_faces", (None, None, 0.0)))
-             if dim == 3 else ())
-    return Scene(
-        mesh=mesh,
-        bodies=(Body("block", 10.0, 0.3, model=block_model), Body("die", 1.0e4, 0.3)),
-        contacts=(ContactPair("block_top", "die_surface", mu=0.3, K="calculix",
-                              stick_slope="calculix"),),
-        steps=(Step("press", increments=press_increments,
-                    bcs=(BC("block_bottom", u(0.0, 0.0)),
-                         BC("die_top", u(0.0, -depth))) + plane),
-               Step("drag", increments=drag_increments,
-                    bcs=(BC("die_top", u(drag, -depth)),))),
-        output=Output(reactions=("die_top", "block_bottom"), fields=False),
-        title=f"plane-strain ironing of a {block_model} block"
-              + (", one hexahedron layer" if dim == 3 else "") + " (CalculiX NLGEOM comparison)")
-
-
-def ironing_figures(reactions: dict, last: int = 4) -> dict:
-    """``{(step, increment): (fx, fy, fz)}`` of the die -> end-of-indentation force
-    ``|F_y|``, mean sliding force (mean F_x over the last ``last`` drag increments),
-    friction ratio (that mean over the mean ``|F_y|``)."""
-    press = max(k for k in reactions if k[0] == 0)
-    drag = sorted(k for k in reactions if k[0] == 1)[-last:]
-    fx = float(np.mean([reactions[k][0] for k in drag]))
-    fy = float(np.mean([abs(reactions[k][1]) for k in drag]))
-    return {"press": abs(float(reactions[press][1])), "slide": fx, "ratio": fx / fy}
-
-
 @pytest.mark.ccx
 @needs_ccx
 def test_neo_hookean_ironing_matches_calculix(tmp_path):
     """Ironing at finite strain on one layer of hexahedra: the end-of-indentation force
     within 1e-3 of CalculiX's, the mean sliding force within 5e-3, the friction ratio within
     0.002 (measured 2.3e-4, 1.1e-3, 2.4e-4)."""
-    scene = ironing_scene(ironing_mesh(tmp_path / "ironing.msh"))
+    scene = ironing_scene(ironing(tmp_path / "ironing.msh"))
     result, ccx, wall = _ours_and_ccx(scene, tmp_path / "ironing.inp")
     ours = ironing_figures({(i.step, i.increment): i.reactions["die_top"]
                             for i in result.increments})
@@ -325,8 +180,9 @@ def test_saint_venant_kirchhoff_press_and_shear_matches_calculix(tmp_path):
     stops in the press ("solution seems to diverge", 4 or 8 increments)."""
     from dolfinx_friction.scene.runner import run
 
-    scene = press_shear_scene(_blocks_mesh(tmp_path / "blocks.msh"), "saint-venant-kirchhoff",
-                              depth=0.1 * 0.25, shear=0.03, shear_increments=4)
+    scene = press_shear_scene(blocks_on_foundation(tmp_path / "blocks.msh"),
+                              "saint-venant-kirchhoff", depth=0.1 * 0.25, shear=0.03,
+                              shear_increments=4)
     ccx = _ccx(scene, tmp_path / "svk.inp")
     result = run(scene, write=False)
     assert [(i.step, i.increment) for i in result.increments] == \

@@ -39,7 +39,7 @@ from dolfinx_friction.scene.runner import PENETRATION_WARNING, run
 from dolfinx_friction.scene.model import (BC, Body, ContactPair, Output, Rigid, RigidMotion, Scene,
                                     Step)
 from dolfinx_friction.scene.driver import ConvergenceError
-from tests import meshes
+from dolfinx_friction.reference import meshes
 
 DEMOS = Path(__file__).resolve().parents[2] / "demos"
 
@@ -72,14 +72,14 @@ def block_on_foundation(path, y0: float = 0.0):
         blk, bl = _rectangle(0.0, y0, 1.0, 0.5, 8, 4)
         fnd, fl = _rectangle(-0.5 - 0.37 / 8, -0.5, 2.0 + 0.37 / 8, 0.5, 16, 4)
         gmsh.model.geo.synchronize()
-        meshes._group(2, [blk], "block")
-        meshes._group(2, [fnd], "foundation")
-        meshes._group(1, [bl[0]], "block_bottom")
-        meshes._group(1, [bl[2]], "block_top")
-        meshes._group(1, [fl[2]], "foundation_top")
-        meshes._group(1, [fl[0]], "foundation_bottom")
+        meshes.group(2, [blk], "block")
+        meshes.group(2, [fnd], "foundation")
+        meshes.group(1, [bl[0]], "block_bottom")
+        meshes.group(1, [bl[2]], "block_top")
+        meshes.group(1, [fl[2]], "foundation_top")
+        meshes.group(1, [fl[0]], "foundation_bottom")
         gmsh.model.mesh.generate(2)
-    return meshes._write(build, path)
+    return meshes.write_model(build, path)
 
 
 def tip_in_groove(path):
@@ -102,14 +102,14 @@ def tip_in_groove(path):
         for line in fl[2:4]:
             geo.mesh.setTransfiniteCurve(line, 9)
         geo.synchronize()
-        meshes._group(2, [fs], "foundation")
-        meshes._group(2, [bs], "block")
-        meshes._group(1, fl[2:4], "groove")
-        meshes._group(1, [fl[0]], "foundation_bottom")
-        meshes._group(1, bl[:2], "tip")
-        meshes._group(1, [bl[3]], "block_top")
+        meshes.group(2, [fs], "foundation")
+        meshes.group(2, [bs], "block")
+        meshes.group(1, fl[2:4], "groove")
+        meshes.group(1, [fl[0]], "foundation_bottom")
+        meshes.group(1, bl[:2], "tip")
+        meshes.group(1, [bl[3]], "block_top")
         gmsh.model.mesh.generate(2)
-    return meshes._write(build, path)
+    return meshes.write_model(build, path)
 
 
 # ----------------------------------------------------------------------------- scenes

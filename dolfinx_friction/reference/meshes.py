@@ -1,0 +1,259 @@
+"""Small Gmsh meshes of the verification cases and the benchmarks: built on rank 0, written
+where all ranks see them (``comm``'s ranks wait for rank 0).
+
+Bodies are physical groups of cells, facet groups name the faces the scenes use; lengths
+are dimensionless.  The CalculiX comparisons' meshes: :func:`blocks_on_foundation`,
+:func:`ironing` (with their scenes in :mod:`dolfinx_friction.reference.cases`).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Optional
+
+import gmsh
+from mpi4py import MPI
+
+
+def group(dim: int, tags: list[int], name: str) -> None:
+    """Name the entities ``tags`` of dimension ``dim`` a physical group ``name``."""
+    tag = gmsh.model.addPhysicalGroup(dim, tags)
+    gmsh.model.setPhysicalName(dim, tag, name)
+
+
+def boundary(dim: int, entity: int, axis: int, value: float) -> list[int]:
+    """Boundary entities of ``entity`` whose centre has coordinate ``axis`` equal to ``value``."""
+    out = []
+    for d, t in gmsh.model.getBoundary([(dim, entity)], oriented=False):
+        if abs(gmsh.model.occ.getCenterOfMass(d, t)[axis] - value) < 1e-9:
+            out.append(t)
+    return out
+
+
+def write_model(build, path: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Run ``build()`` on a fresh Gmsh model on rank 0 and write the mesh to ``path``;
+    every rank of ``comm`` returns ``path`` once it is written."""
+    if comm.rank == 0:
+        gmsh.initialize()
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add(path.stem)
+        try:
+            build()
+            gmsh.write(str(path))
+        finally:
+            gmsh.finalize()
+    comm.barrier()
+    return path
+
+
+def box(x0: float, y0: float, z0: float, dx: float, dy: float, dz: float) -> int:
+    """An OpenCASCADE box (its volume tag), synchronised."""
+    tag = gmsh.model.occ.addBox(x0, y0, z0, dx, dy, dz)
+    gmsh.model.occ.synchronize()
+    return tag
+
+
+def mesh_boxes(boxes: list[tuple[int, tuple[int, int, int]]], tets: bool = False) -> None:
+    """Structured hex (or tet) meshes of boxes, ``n`` = segments along x, y, z."""
+    for volume, n in boxes:
+        for _, surf in gmsh.model.getBoundary([(3, volume)], oriented=False):
+            for _, curve in gmsh.model.getBoundary([(2, surf)], oriented=False):
+                a, b = gmsh.model.getBoundary([(1, curve)], oriented=False)
+                pa = gmsh.model.getValue(0, a[1], [])
+                pb = gmsh.model.getValue(0, b[1], [])
+                axis = max(range(3), key=lambda k: abs(pa[k] - pb[k]))
+                gmsh.model.mesh.setTransfiniteCurve(curve, n[axis] + 1)
+            gmsh.model.mesh.setTransfiniteSurface(surf)
+            if not tets:
+                gmsh.model.mesh.setRecombine(2, surf)
+        gmsh.model.mesh.setTransfiniteVolume(volume)
+    gmsh.model.mesh.generate(3)
+
+
+def block_3d(path: Path, n: tuple[int, int, int] = (4, 4, 2), tets: bool = False) -> Path:
+    """Box [0,1]x[0,1]x[0,0.5]: body ``block``, facets ``bottom`` (z=0), ``top``,
+    ``side_x0``, ``side_y0``."""
+    def build():
+        b = box(0, 0, 0, 1, 1, 0.5)
+        mesh_boxes([(b, n)], tets)
+        group(3, [b], "block")
+        group(2, boundary(3, b, 2, 0.0), "bottom")
+        group(2, boundary(3, b, 2, 0.5), "top")
+        group(2, boundary(3, b, 0, 0.0), "side_x0")
+        group(2, boundary(3, b, 1, 0.0), "side_y0")
+    return write_model(build, path)
+
+
+def two_boxes(path: Path, n_block: tuple[int, int, int] = (4, 4, 2),
+              n_foundation: tuple[int, int, int] = (5, 5, 2)) -> Path:
+    """Block [0.25,0.75]^2 x [0.5,0.75] on foundation [0,1]^2 x [0,0.5] (separate volumes).
+
+    Groups: bodies ``block``, ``foundation``; facets ``block_bottom``, ``block_top``,
+    ``foundation_top``, ``foundation_bottom``.
+    """
+    def build():
+        f = box(0, 0, 0, 1, 1, 0.5)
+        b = box(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
+        mesh_boxes([(f, n_foundation), (b, n_block)])
+        group(3, [f], "foundation")
+        group(3, [b], "block")
+        group(2, boundary(3, f, 2, 0.0), "foundation_bottom")
+        group(2, boundary(3, f, 2, 0.5), "foundation_top")
+        group(2, boundary(3, b, 2, 0.5), "block_bottom")
+        group(2, boundary(3, b, 2, 0.75), "block_top")
+    return write_model(build, path)
+
+
+def rectangle_2d(path: Path, n: tuple[int, int] = (8, 2), quads: bool = True,
+                 order: int = 1) -> Path:
+    """Rectangle [0,1]x[0,0.25]: body ``block``, edges ``bottom``, ``top``, ``left``, ``right``."""
+    def build():
+        s = gmsh.model.occ.addRectangle(0, 0, 0, 1, 0.25)
+        gmsh.model.occ.synchronize()
+        for _, curve in gmsh.model.getBoundary([(2, s)], oriented=False):
+            a, b = gmsh.model.getBoundary([(1, curve)], oriented=False)
+            pa, pb = gmsh.model.getValue(0, a[1], []), gmsh.model.getValue(0, b[1], [])
+            axis = 0 if abs(pa[0] - pb[0]) > abs(pa[1] - pb[1]) else 1
+            gmsh.model.mesh.setTransfiniteCurve(curve, n[axis] + 1)
+        gmsh.model.mesh.setTransfiniteSurface(s)
+        if quads:
+            gmsh.model.mesh.setRecombine(2, s)
+        gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.setOrder(order)
+        group(2, [s], "block")
+        group(1, boundary(2, s, 1, 0.0), "bottom")
+        group(1, boundary(2, s, 1, 0.25), "top")
+        group(1, boundary(2, s, 0, 0.0), "left")
+        group(1, boundary(2, s, 0, 1.0), "right")
+    return write_model(build, path)
+
+
+def blocks_on_foundation(path: Path, n_foundation: int = 5, n_block: int = 4,
+                         tets: bool = False, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Block [0.25,0.75]^2 x [0.5,0.75] on foundation [0,1]^2 x [0,0.5] (not fragmented:
+    the bodies do not share nodes), structured hexahedra or tetrahedra.
+
+    Groups: ``block``, ``foundation``; ``block_bottom``, ``block_top``,
+    ``foundation_top``, ``foundation_bottom``.  The CalculiX comparisons' mesh
+    (``tests/verification/test_calculix.py``).
+    """
+    def build():
+        occ = gmsh.model.occ
+        f = occ.addBox(0, 0, 0, 1, 1, 0.5)
+        b = occ.addBox(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
+        occ.synchronize()
+        for vol, n in ((f, n_foundation), (b, n_block)):
+            surfaces = gmsh.model.getBoundary([(3, vol)], combined=False, oriented=False)
+            for _, curve in gmsh.model.getBoundary(surfaces, combined=False, oriented=False):
+                gmsh.model.mesh.setTransfiniteCurve(abs(curve), n + 1)
+            for _, s in surfaces:
+                gmsh.model.mesh.setTransfiniteSurface(s)
+                if not tets:
+                    gmsh.model.mesh.setRecombine(2, s)
+            gmsh.model.mesh.setTransfiniteVolume(vol)
+
+        def face(vol, z):
+            return [t for _, t in gmsh.model.getBoundary([(3, vol)], oriented=False)
+                    if abs(occ.getCenterOfMass(2, t)[2] - z) < 1e-9]
+
+        for dim, tags, name in ((3, [f], "foundation"), (3, [b], "block"),
+                                (2, face(f, 0.0), "foundation_bottom"),
+                                (2, face(f, 0.5), "foundation_top"),
+                                (2, face(b, 0.5), "block_bottom"),
+                                (2, face(b, 0.75), "block_top")):
+            gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
+        gmsh.model.mesh.generate(3)
+    return write_model(build, path, comm)
+
+
+def ironing(path: Path, length: float = 10.0, height: float = 5.0, radius: float = 2.0,
+            x0: float = 3.0, nx: int = 40, ny: int = 6, bias: float = 0.75, n_arc: int = 32,
+            thickness: Optional[float] = None, dim: int = 3) -> Path:
+    """The plane-strain ironing geometry, structured: one layer of hexahedra (``dim = 3``)
+    or its quadrilaterals (``dim = 2``: the same nodes as the hexahedra's face z = 0).
+
+    Block ``[0, length] x [0, height]`` (``nx`` x ``ny`` cells, rows graded by ``bias``
+    towards the top), half-disk die of ``radius`` centred at ``(x0, height + radius)``
+    with its flat top there, as an O-grid (a core square and three patches under the
+    arc, ``n_arc`` faces along the arc); in 3D extruded by one layer of ``thickness``
+    (default ``length / nx``) along z.  Groups: ``block``, ``die``; ``block_top``,
+    ``block_bottom``, ``die_surface`` (the arc), ``die_top``; in 3D also ``block_faces``
+    and ``die_faces`` (z = 0 and z = thickness).
+    """
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    try:
+        gmsh.model.add("ironing_one_layer" if dim == 3 else "ironing_2d")
+        geo = gmsh.model.geo
+        t = thickness if thickness is not None else length / nx
+        p = [geo.addPoint(0, 0, 0), geo.addPoint(length, 0, 0), geo.addPoint(length, height, 0),
+             geo.addPoint(0, height, 0)]
+        bottom, right, top, left = (geo.addLine(p[0], p[1]), geo.addLine(p[1], p[2]),
+                                    geo.addLine(p[2], p[3]), geo.addLine(p[3], p[0]))
+        block = geo.addPlaneSurface([geo.addCurveLoop([bottom, right, top, left])])
+        cx, cy, R = x0, height + radius, radius
+        s, q = R / 2, R / math.sqrt(2)
+        o = geo.addPoint(cx, cy, 0)
+        A, B, C, D = (geo.addPoint(cx - R, cy, 0), geo.addPoint(cx - q, cy - q, 0),
+                      geo.addPoint(cx + q, cy - q, 0), geo.addPoint(cx + R, cy, 0))
+        a, b, c, d = (geo.addPoint(cx - s, cy, 0), geo.addPoint(cx - s, cy - s, 0),
+                      geo.addPoint(cx + s, cy - s, 0), geo.addPoint(cx + s, cy, 0))
+        arcs = geo.addCircleArc(A, o, B), geo.addCircleArc(B, o, C), geo.addCircleArc(C, o, D)
+        Bb, Cc, Dd, Aa = geo.addLine(B, b), geo.addLine(C, c), geo.addLine(D, d), geo.addLine(A, a)
+        ab, bc, cd, da = geo.addLine(a, b), geo.addLine(b, c), geo.addLine(c, d), geo.addLine(d, a)
+        loops = {"core": [ab, bc, cd, da], "left": [arcs[0], Bb, -ab, -Aa],
+                 "bottom": [arcs[1], Cc, -bc, -Bb], "right": [arcs[2], Dd, -cd, -Cc]}
+        die = {k: geo.addPlaneSurface([geo.addCurveLoop(v)]) for k, v in loops.items()}
+        m = geo.mesh
+        m.setTransfiniteCurve(bottom, nx + 1)
+        m.setTransfiniteCurve(top, nx + 1)
+        m.setTransfiniteCurve(right, ny + 1, "Progression", bias)  # upwards: thinner rows
+        m.setTransfiniteCurve(left, ny + 1, "Progression", 1.0 / bias)
+        n1 = max(1, n_arc // 4)
+        n2 = max(1, n_arc - 2 * n1)
+        for curve, n in ((arcs[0], n1), (arcs[2], n1), (ab, n1), (cd, n1), (arcs[1], n2),
+                         (bc, n2), (da, n2), (Bb, n1), (Cc, n1), (Dd, n1), (Aa, n1)):
+            m.setTransfiniteCurve(curve, n + 1)
+        sources = [block, *die.values()]
+        for surface in sources:
+            m.setTransfiniteSurface(surface)
+            m.setRecombine(2, surface)
+        # the 2D entities themselves, or (3D) what the extrusion makes of them
+        body, side = {x: x for x in sources}, {}
+        if dim == 3:
+            ext = geo.extrude([(2, x) for x in sources], 0, 0, t, numElements=[1],
+                              recombine=True)
+            # per source surface: its copy at z = t, the volume, the lateral surfaces
+            copies = []
+            for k, (src, curves) in enumerate(zip(sources, [[bottom, right, top, left],
+                                                             *loops.values()])):
+                chunk = ext[6 * k:6 * k + 6]
+                copies.append(chunk[0][1])
+                body[src] = chunk[1][1]
+                for curve, (_, lat) in zip(curves, chunk[2:]):
+                    side.setdefault(abs(curve), lat)
+        geo.synchronize()
+
+        def group(d, tags, name):
+            gmsh.model.setPhysicalName(d, gmsh.model.addPhysicalGroup(d, tags), name)
+
+        def facets(curves):
+            return [side.get(abs(c), abs(c)) for c in curves]
+
+        group(dim, [body[block]], "block")
+        group(dim, [body[x] for x in die.values()], "die")
+        group(dim - 1, facets([top]), "block_top")
+        group(dim - 1, facets([bottom]), "block_bottom")
+        if dim == 3:
+            group(2, [block, copies[0]], "block_faces")
+        group(dim - 1, facets(arcs), "die_surface")
+        group(dim - 1, facets([Aa, da, Dd]), "die_top")
+        if dim == 3:
+            group(2, [*die.values(), *copies[1:]], "die_faces")
+        gmsh.model.mesh.generate(dim)
+        types = list(gmsh.model.mesh.getElementTypes(dim))
+        assert types == [5 if dim == 3 else 3], f"not all hexahedra / quadrilaterals: {types}"
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return path
