@@ -17,3 +17,8 @@ class Interrupted(BaseException):
     def __init__(self, code: int):
         super().__init__(code)
         self.code = code
+
+
+class ContactSetupError(ValueError):
+    """A contact pair or a system that cannot be built from what it was given: a bad
+    keyword, a rigid obstacle's geometry, a body nothing holds (one-line message)."""

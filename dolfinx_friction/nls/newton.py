@@ -20,7 +20,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction.nls.linear import (KRYLOV_RTOL, LinearSolver, forget_options,
                                      write_options)
-from dolfinx_friction.scene.model import CONVERGENCE, STALL_ITERATIONS
+from dolfinx_friction.nls.defaults import CONVERGENCE, STALL_ITERATIONS
 from dolfinx_friction.fem.block_problem import BlockProblem
 
 
@@ -57,7 +57,7 @@ class Newton:
     norm test alone) or ``"reactions"`` (that test, or the reactions and displacements
     settled to ``reaction_tol``: :func:`settled`).  ``stall``: with ``solve(may_stall=True)``,
     give up after that many iterations without a new lowest residual (0: never; default
-    :data:`~dolfinx_friction.scene.model.STALL_ITERATIONS`).
+    :data:`~dolfinx_friction.nls.defaults.STALL_ITERATIONS`).
     """
 
     def __init__(self, rtol: float = 1e-9, atol: float = 1e-10, max_iterations: int = 30,

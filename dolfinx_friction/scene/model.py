@@ -16,41 +16,24 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Optional, Union
 
+from dolfinx_friction.fem import contact_settings, obstacles
+from dolfinx_friction.fem.contact_settings import (  # noqa: F401  (re-exported)
+    CALCULIX, LAWS, PENALTY_PER_SPACING, STICK_SLOPE_PER_SPACING, TANGENTS)
+from dolfinx_friction.fem.obstacles import SHAPES  # noqa: F401  (re-exported)
+from dolfinx_friction.nls.defaults import CONVERGENCE, STALL_ITERATIONS
+from dolfinx_friction.rules import Key, Rules, validate
 from dolfinx_friction.scene import validation as v
-from dolfinx_friction.scene.validation import CALCULIX, Key, Rules, validate
 
 Vector = tuple[float, ...]
 #: A prescribed displacement component, a number or ``None`` for "free".
 Component = Optional[float]
 
-LAWS = ("linear", "exponential", "tabular", "hard")
 #: Constitutive models of a body, small-strain linear elasticity or finite strain (the
 #: scene is then solved geometrically nonlinearly): Saint Venant-Kirchhoff (Green-Lagrange
 #: strain, second Piola-Kirchhoff stress from E and nu: CalculiX's NLGEOM with ``*ELASTIC``) and
 #: compressible Neo-Hooke as CalculiX's ``*HYPERELASTIC, NEO HOOKE``.
 MODELS = ("linear", "saint-venant-kirchhoff", "neo-hookean")
-SHAPES = ("plane", "sphere", "cylinder")
-TANGENTS = ("consistent", "calculix")
-#: Newton's convergence tests (:mod:`dolfinx_friction.nls.newton`)
-CONVERGENCE = ("residual", "reactions")
-#: Newton gives up on an increment (it is cut back) after this many iterations without a
-#: new lowest residual (counted from the first step's): contact statuses cycling at the
-#: edge of a growing zone converge faster in halved increments (benchmarks/RESULTS.md;
-#: in converging solves off that kind the longest such run is 2)
-STALL_ITERATIONS = 6
 
-#: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
-#: h: its node spacing, see :meth:`ContactPair.resolved`), from the stability maps
-#: (benchmarks/stability/README.md).  K = 10 E/h is the stiffest decade at which every
-#: K x increment map converges for every increment size and method (with line search
-#: without a cutback); at 100 E/h frictional sliding fails or loses the contact, at
-#: 1 E/h the overclosure reaches 4 % of the spacing (Hertz, ironing: the penetration
-#: warning fires).  lambda = 1 E/h: the stiffest decade at which both stick slope x mu
-#: maps converge for every mu with and without line search, the full-slip ratio within
-#: 1 % of mu on the block (10 E/h: cutbacks and a lost contact on the ironing, 100 E/h
-#: fails; <= 0.01 E/h does not mobilise the friction).
-PENALTY_PER_SPACING = 10.0
-STICK_SLOPE_PER_SPACING = 1.0
 
 
 @dataclass(frozen=True)
@@ -128,22 +111,7 @@ class ContactPair:
         :data:`CALCULIX` gives 50 E and E/2.  Without ``spacing`` a defaulted ``K`` and
         ``stick_slope`` stay ``None`` (the pressure laws other than linear need no ``h``).
         """
-        def rule(value, per_spacing: float, calculix: float):
-            if value == CALCULIX:
-                return calculix * E_slave
-            if value is None and spacing is not None:
-                return per_spacing * E_slave / spacing
-            return value
-
-        law = "linear" if self.law == "hard" else self.law
-        return replace(
-            self,
-            law=law,
-            K=rule(self.K, PENALTY_PER_SPACING, 50.0),
-            sigma_inf=self.sigma_inf if self.sigma_inf is not None else E_slave / 70000.0,
-            c0=self.c0 if self.c0 is not None else 1e-3,
-            stick_slope=rule(self.stick_slope, STICK_SLOPE_PER_SPACING, 0.5),
-        )
+        return replace(self, **contact_settings.defaults(self, E_slave, spacing))
 
 
 @dataclass(frozen=True)
@@ -253,29 +221,12 @@ RULES: dict[type, Rules] = {
         "thickness": Key(v.number(gt=0)),
         "model": Key(v.one_of(*MODELS)),
     }),
-    Rigid: Rules("rigid", {
-        "name": Key(v.name, required=True),
-        "shape": Key(v.one_of(*SHAPES), required=True),
-        "point": Key(v.vector()),
-        "normal": Key(v.vector(nonzero=True)),
-        "center": Key(v.vector()),
-        "axis": Key(v.vector(nonzero=True)),
-        "radius": Key(v.number(gt=0)),
-    }, (v.check_shape,)),
+    Rigid: obstacles.RULES,
     ContactPair: Rules("contact", {
         "slave": Key(v.name, required=True),
         "master": Key(v.name, required=True),
-        "law": Key(v.one_of(*LAWS)),
-        "K": Key(v.penalty),
-        "sigma_inf": Key(v.number(gt=0)),
-        "c0": Key(v.number(gt=0)),
-        "p0": Key(v.number(ge=0)),
-        "table": Key(v.pressure_table),
-        "mu": Key(v.number(ge=0)),
-        "stick_slope": Key(v.penalty),
-        "tangent": Key(v.one_of(*TANGENTS)),
-        "pairing_iterations": Key(v.integer(1, 10_000)),
-    }, (v.check_law, v.check_not_self_contact)),
+        **contact_settings.KEYS,
+    }, (contact_settings.check_law, v.check_not_self_contact)),
     BC: Rules("step.bc", {
         "on": Key(v.name, required=True),
         "u": Key(v.displacement, required=True),

@@ -1,0 +1,147 @@
+"""A contact pair's settings: their rules and their defaults, in one place.
+
+Pure Python (the rules engine :mod:`dolfinx_friction.rules`), no dolfinx: the scene's
+``[[contact]]`` (:class:`~dolfinx_friction.scene.model.ContactPair`) and the keywords of
+:class:`~dolfinx_friction.fem.node_to_surface.NodeToSurface` are checked by the same
+:data:`KEYS` (the same one-line messages, ``contact.mu = -0.1: must be >= 0``) and get the
+same defaults (:func:`defaults`).  ``K``, ``sigma_inf`` and ``stick_slope`` default with
+the slave body's Young's modulus ``E`` and its node spacing ``h``; :data:`CALCULIX` asks
+for CalculiX's rules.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any, Optional, Union
+
+from dolfinx_friction import rules as r
+from dolfinx_friction.rules import CALCULIX, Key, Rules, validate
+
+__all__ = ["CALCULIX", "KEYS", "LAWS", "TANGENTS", "PENALTY_PER_SPACING",
+           "STICK_SLOPE_PER_SPACING", "ContactSettings", "check_law", "defaults",
+           "pressure_table"]
+
+LAWS = ("linear", "exponential", "tabular", "hard")
+TANGENTS = ("consistent", "calculix")
+
+#: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
+#: h: its node spacing, see :func:`defaults`), from the stability maps
+#: (benchmarks/stability/README.md).  K = 10 E/h is the stiffest decade at which every
+#: K x increment map converges for every increment size and method (with line search
+#: without a cutback); at 100 E/h frictional sliding fails or loses the contact, at
+#: 1 E/h the overclosure reaches 4 % of the spacing (Hertz, ironing: the penetration
+#: warning fires).  lambda = 1 E/h: the stiffest decade at which both stick slope x mu
+#: maps converge for every mu with and without line search, the full-slip ratio within
+#: 1 % of mu on the block (10 E/h: cutbacks and a lost contact on the ironing, 100 E/h
+#: fails; <= 0.01 E/h does not mobilise the friction).
+PENALTY_PER_SPACING = 10.0
+STICK_SLOPE_PER_SPACING = 1.0
+
+
+def pressure_table(value: Any, key: str) -> tuple[tuple[float, float], ...]:
+    """Tabular law: >= 2 ``[pressure, overclosure]`` pairs, overclosure non-decreasing.
+
+    Equal consecutive overclosures are accepted: the law separates them by 1e-10
+    as CalculiX does (docs/theory.md §4.1).
+    """
+    if not r._is_list(value) or len(value) < 2:
+        r.fail(key, "must be a list of at least 2 [pressure, overclosure] pairs", value)
+    pairs = []
+    for i, pair in enumerate(value):
+        where = r.join(key, i)
+        if not r._is_list(pair) or len(pair) != 2:
+            r.fail(where, "must be a [pressure, overclosure] pair", pair)
+        pairs.append((r.PRESSURE(pair[0], r.join(where, 0)),
+                      r.ANY_NUMBER(pair[1], r.join(where, 1))))
+    for i in range(1, len(pairs)):
+        previous = pairs[i - 1][1]
+        if pairs[i][1] < previous:
+            r.fail(f"{key}.{i}.1", f"overclosure must not decrease (previous: {previous:g})",
+                   value[i][1])
+        if pairs[i][0] <= pairs[i - 1][0]:
+            r.fail(f"{key}.{i}.0", "pressure must increase with the overclosure "
+                   f"(previous: {pairs[i - 1][0]:g})", value[i][0])
+    return tuple(pairs)
+
+
+#: The keys a law cannot do without (the others have defaults, docs/theory.md §8).
+#: Keys of other laws are accepted and unused, so a sweep may switch ``law`` alone.
+_LAW_REQUIRES = {"exponential": ("p0",), "tabular": ("table",)}
+
+
+def check_law(pair: Any, key: str) -> None:
+    for name_ in _LAW_REQUIRES.get(pair.law, ()):
+        if getattr(pair, name_) is None:
+            r.fail(r.join(key, name_), f"required by law {pair.law!r}")
+
+
+#: The rules of a contact's law and friction, by scene-file key in file order (the keys
+#: of ``[[contact]]`` after ``slave`` and ``master``).
+KEYS: dict[str, Key] = {
+    "law": Key(r.one_of(*LAWS)),
+    "K": Key(r.penalty),
+    "sigma_inf": Key(r.number(gt=0)),
+    "c0": Key(r.number(gt=0)),
+    "p0": Key(r.number(ge=0)),
+    "table": Key(pressure_table),
+    "mu": Key(r.number(ge=0)),
+    "stick_slope": Key(r.penalty),
+    "tangent": Key(r.one_of(*TANGENTS)),
+    "pairing_iterations": Key(r.integer(1, 10_000)),
+}
+
+
+def defaults(settings: Any, E_slave: float, spacing: Optional[float] = None) -> dict:
+    """The settings of ``settings`` (a :class:`ContactSettings` or a scene ``ContactPair``)
+    whose defaults depend on the slave body, resolved (docs/theory.md §8, scene-format.md
+    version 2): ``law`` (``"hard"`` is ``"linear"``), ``K``, ``sigma_inf``, ``c0``,
+    ``stick_slope``.
+
+    ``sigma_inf = E/70000``, ``c0 = 1e-3``; with the slave node spacing ``h``
+    (``spacing``, see :attr:`NodeToSurface.spacing`) also ``K = 10 E/h`` and
+    ``stick_slope = E/h`` (:data:`PENALTY_PER_SPACING`, :data:`STICK_SLOPE_PER_SPACING`);
+    :data:`CALCULIX` gives 50 E and E/2.  Without ``spacing`` a defaulted ``K`` and
+    ``stick_slope`` stay ``None`` (the pressure laws other than linear need no ``h``).
+    """
+    def rule(value, per_spacing: float, calculix: float):
+        if value == CALCULIX:
+            return calculix * E_slave
+        if value is None and spacing is not None:
+            return per_spacing * E_slave / spacing
+        return value
+
+    return dict(
+        law="linear" if settings.law == "hard" else settings.law,
+        K=rule(settings.K, PENALTY_PER_SPACING, 50.0),
+        sigma_inf=settings.sigma_inf if settings.sigma_inf is not None else E_slave / 70000.0,
+        c0=settings.c0 if settings.c0 is not None else 1e-3,
+        stick_slope=rule(settings.stick_slope, STICK_SLOPE_PER_SPACING, 0.5),
+    )
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """A contact's law and friction as given (checked by :data:`KEYS`, under the table
+    name ``contact``); ``None`` (or :data:`CALCULIX`) for a default still to be resolved
+    (:meth:`resolved`)."""
+
+    law: str = "linear"
+    K: Union[float, str, None] = None  # None: the default; CALCULIX: 50 E
+    sigma_inf: Optional[float] = None
+    c0: Optional[float] = None
+    p0: Optional[float] = None
+    table: Optional[tuple[tuple[float, float], ...]] = None  # (pressure, overclosure)
+    mu: float = 0.0
+    stick_slope: Union[float, str, None] = None  # None: the default; CALCULIX: E/2
+    tangent: str = "consistent"
+    #: Newton iterations per increment in which slave nodes are re-paired (CalculiX: 8)
+    pairing_iterations: int = 8
+
+    def __post_init__(self) -> None:
+        validate(self, RULES)
+
+    def resolved(self, E_slave: float, spacing: Optional[float] = None) -> "ContactSettings":
+        """The defaults filled (:func:`defaults`)."""
+        return replace(self, **defaults(self, E_slave, spacing))
+
+
+RULES = Rules("contact", KEYS, (check_law,))

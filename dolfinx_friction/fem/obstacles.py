@@ -1,0 +1,120 @@
+"""Analytic rigid obstacles, the master of a :class:`~dolfinx_friction.NodeToSurface`.
+
+An :class:`Obstacle` is a shape and its geometry, no dolfinx: plane (``point``,
+``normal``), sphere (a circle in 2D: ``center``, ``radius``) or cylinder (3D: ``point``,
+``axis``, ``radius``).  The outward normal points towards the deformable body (for a
+sphere or a cylinder: away from the axis).  :func:`rigid_plane`, :func:`rigid_sphere` and
+:func:`rigid_cylinder` check what they are given (:class:`~dolfinx_friction.errors.
+ContactSetupError`) and make unit directions; the scene builds its ``[[rigid]]`` obstacles
+as they are (:meth:`Obstacle.like`).
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Optional
+
+from dolfinx_friction import rules as r
+from dolfinx_friction.errors import ContactSetupError
+from dolfinx_friction.rules import Key, Rules, fail, join, validate
+
+__all__ = ["SHAPES", "Obstacle", "rigid_cylinder", "rigid_plane", "rigid_sphere"]
+
+SHAPES = ("plane", "sphere", "cylinder")
+Vector = tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """An analytic rigid obstacle in its reference position (its translation is the
+    contact's, :attr:`~dolfinx_friction.NodeToSurface.obstacle_translation`)."""
+
+    name: str
+    shape: str  # one of SHAPES
+    point: Optional[Vector] = None
+    normal: Optional[Vector] = None
+    center: Optional[Vector] = None
+    axis: Optional[Vector] = None
+    radius: Optional[float] = None
+
+    def __post_init__(self) -> None:
+        validate(self, RULES)
+
+    @classmethod
+    def like(cls, rigid: Any) -> Obstacle:
+        """The obstacle of any object with the same attributes (a scene ``Rigid``)."""
+        return cls(rigid.name, rigid.shape, point=rigid.point, normal=rigid.normal,
+                   center=rigid.center, axis=rigid.axis, radius=rigid.radius)
+
+
+def _vector(values, what: str) -> tuple[float, ...]:
+    import numpy as np  # (here: reading a scene imports this module, not numpy)
+    v = tuple(float(c) for c in values)
+    if not all(np.isfinite(v)):
+        raise ContactSetupError(f"{what} must be finite, got {v}")
+    return v
+
+
+def _direction(values, what: str) -> tuple[float, ...]:
+    """A unit vector along ``values`` (scaled first: 1e-200 components are a direction)."""
+    import numpy as np
+    v = np.asarray(_vector(values, what))
+    scale = np.abs(v).max(initial=0.0)
+    if scale == 0.0:
+        raise ContactSetupError(f"{what} is zero: a rigid obstacle needs a direction")
+    v = v / scale
+    return tuple(float(c) for c in v / np.linalg.norm(v))
+
+
+def rigid_plane(point: Sequence[float], normal: Sequence[float],
+                name: str = "plane") -> Obstacle:
+    """A rigid plane through ``point``; ``normal`` points towards the deformable body."""
+    return Obstacle(name, "plane", point=_vector(point, "rigid plane point"),
+                    normal=_direction(normal, "rigid plane normal"))
+
+
+def rigid_sphere(center: Sequence[float], radius: float, name: str = "sphere") -> Obstacle:
+    """A rigid sphere (a circle in 2D); the body touches it from outside."""
+    if not float(radius) > 0.0:
+        raise ContactSetupError(f"rigid sphere radius must be positive, got {radius}")
+    return Obstacle(name, "sphere", center=_vector(center, "rigid sphere center"),
+                    radius=float(radius))
+
+
+def rigid_cylinder(point: Sequence[float], axis: Sequence[float], radius: float,
+                   name: str = "cylinder") -> Obstacle:
+    """A rigid circular cylinder (3D) through ``point`` along ``axis``."""
+    if not float(radius) > 0.0:
+        raise ContactSetupError(f"rigid cylinder radius must be positive, got {radius}")
+    return Obstacle(name, "cylinder", point=_vector(point, "rigid cylinder point"),
+                    axis=_direction(axis, "rigid cylinder axis"), radius=float(radius))
+
+
+SHAPE_KEYS = {"plane": ("point", "normal"), "sphere": ("center", "radius"),
+              "cylinder": ("point", "axis", "radius")}
+_GEOMETRY_KEYS = ("point", "normal", "center", "axis", "radius")
+
+
+def check_shape(rigid: Any, key: str) -> None:
+    needed = SHAPE_KEYS[rigid.shape]
+    for name_ in _GEOMETRY_KEYS:
+        given = getattr(rigid, name_) is not None
+        if name_ in needed and not given:
+            fail(join(key, name_), f"required for shape {rigid.shape!r}")
+        if name_ not in needed and given:
+            fail(join(key, name_), f"not a parameter of shape {rigid.shape!r} "
+                 f"(it takes {', '.join(needed)})", getattr(rigid, name_))
+
+
+#: The rules of an obstacle, by scene-file key in file order (the scene's ``[[rigid]]``
+#: has the same: a script and a scene file get the same messages).
+KEYS: dict[str, Key] = {
+    "name": Key(r.name, required=True),
+    "shape": Key(r.one_of(*SHAPES), required=True),
+    "point": Key(r.vector()),
+    "normal": Key(r.vector(nonzero=True)),
+    "center": Key(r.vector()),
+    "axis": Key(r.vector(nonzero=True)),
+    "radius": Key(r.number(gt=0)),
+}
+RULES = Rules("rigid", KEYS, (check_shape,))
