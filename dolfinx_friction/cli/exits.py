@@ -26,7 +26,7 @@ EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
 _INPUT_ERRORS = (("dolfinx_friction.scene.validation", "SceneError"),
                  ("dolfinx_friction.scene.validation", "ModelError"),
                  ("dolfinx_friction.io.msh", "MeshError"),
-                 ("dolfinx_friction.fem.node_to_surface", "ContactSetupError"),  # a body left free
+                 ("dolfinx_friction.errors", "ContactSetupError"),  # a body left free
                  ("dolfinx_friction.io.reader", "ResultsError"),
                  ("dolfinx_friction.cli.sweep", "SweepError"),
                  ("dolfinx_friction.cli.commands", "UsageError"))

@@ -38,32 +38,34 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
+from dolfinx_friction import rules
 from dolfinx_friction.contact.element import OPEN, ContactParameters
 from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
+from dolfinx_friction.errors import ContactSetupError
+from dolfinx_friction.fem.contact_settings import CALCULIX, ContactSettings
 from dolfinx_friction.fem.numbering import BodyField, DofLayout
-from dolfinx_friction.io.gmsh import BodyMesh
+from dolfinx_friction.fem.obstacles import (  # noqa: F401  (rigid_*: re-exported)
+    Obstacle, _vector, rigid_cylinder, rigid_plane, rigid_sphere)
 from dolfinx_friction.fem.pairing import ContactInteraction, RigidMaster
-from dolfinx_friction.scene.model import CALCULIX, Body, ContactPair, Rigid
-from dolfinx_friction.scene.validation import SceneError, modulus
 from dolfinx_friction.fem.surfaces import SlaveNodes, master_faces
+from dolfinx_friction.fem.tagged_mesh import BodyMesh
+from dolfinx_friction.rules import SceneError, modulus
 
 NO_ELEMENT = -1  #: status of a slave node without a contact element (far from the master)
 #: the attribute of a PETSc matrix that records which pairs' couplings its pattern holds
 _MATRIX_ATTR = "dolfinx_friction_couplings"
 
 
-def make_law(pair: ContactPair) -> Law:
-    """The pressure-overclosure law of a scene pair (defaults resolved)."""
+def make_law(pair) -> Law:
+    """The pressure-overclosure law of contact settings, defaults resolved
+    (:class:`~dolfinx_friction.fem.contact_settings.ContactSettings`, a scene
+    ``ContactPair``)."""
     if pair.law == "exponential":
         return Exponential(pair.c0, pair.p0)
     if pair.law == "tabular":
         p, d = zip(*pair.table)
         return Tabular(tuple(p), tuple(d))
     return Linear(pair.K, pair.sigma_inf, pair.c0)
-
-
-class ContactSetupError(ValueError):
-    """A contact pair that cannot be built from what it was given (one-line message)."""
 
 
 @dataclass(frozen=True)
@@ -79,46 +81,6 @@ class Surface:
     @property
     def label(self) -> str:
         return f"facets tagged {self.value}"
-
-
-def _vector(values, what: str) -> tuple[float, ...]:
-    v = tuple(float(c) for c in values)
-    if not all(np.isfinite(v)):
-        raise ContactSetupError(f"{what} must be finite, got {v}")
-    return v
-
-
-def _direction(values, what: str) -> tuple[float, ...]:
-    """A unit vector along ``values`` (scaled first: 1e-200 components are a direction)."""
-    v = np.asarray(_vector(values, what))
-    scale = np.abs(v).max(initial=0.0)
-    if scale == 0.0:
-        raise ContactSetupError(f"{what} is zero: a rigid obstacle needs a direction")
-    v = v / scale
-    return tuple(float(c) for c in v / np.linalg.norm(v))
-
-
-def rigid_plane(point: Sequence[float], normal: Sequence[float], name: str = "plane") -> Rigid:
-    """A rigid plane through ``point``; ``normal`` points towards the deformable body."""
-    return Rigid(name, "plane", point=_vector(point, "rigid plane point"),
-                 normal=_direction(normal, "rigid plane normal"))
-
-
-def rigid_sphere(center: Sequence[float], radius: float, name: str = "sphere") -> Rigid:
-    """A rigid sphere (a circle in 2D); the body touches it from outside."""
-    if not float(radius) > 0.0:
-        raise ContactSetupError(f"rigid sphere radius must be positive, got {radius}")
-    return Rigid(name, "sphere", center=_vector(center, "rigid sphere center"),
-                 radius=float(radius))
-
-
-def rigid_cylinder(point: Sequence[float], axis: Sequence[float], radius: float,
-                   name: str = "cylinder") -> Rigid:
-    """A rigid circular cylinder (3D) through ``point`` along ``axis``."""
-    if not float(radius) > 0.0:
-        raise ContactSetupError(f"rigid cylinder radius must be positive, got {radius}")
-    return Rigid(name, "cylinder", point=_vector(point, "rigid cylinder point"),
-                 axis=_direction(axis, "rigid cylinder axis"), radius=float(radius))
 
 
 @dataclass
@@ -206,7 +168,7 @@ class NodeToSurface:
     ----------
     slave : Surface
         The facets whose nodes are projected onto the master.
-    master : Surface or Rigid
+    master : Surface or Obstacle
         Master facets of a (usually other) body, or an analytic rigid obstacle; a rigid
         obstacle's translation is :attr:`obstacle_translation` (prescribed, no dofs).
     spaces : sequence of dolfinx FunctionSpaces, optional
@@ -253,7 +215,7 @@ class NodeToSurface:
         resolves them gradually, 0 otherwise (default).
     """
 
-    def __init__(self, slave: Surface, master: Union[Surface, Rigid], *,
+    def __init__(self, slave: Surface, master: Union[Surface, Obstacle], *,
                  spaces: Optional[Sequence] = None, law: Optional[Law] = None,
                  K: Union[float, str, None] = None, sigma_inf: Optional[float] = None,
                  c0: Optional[float] = None, mu: float = 0.0,
@@ -265,7 +227,9 @@ class NodeToSurface:
         comm = slave.V.mesh.comm
         self.comm, self.name = comm, name
         self.gdim = _check_space(slave.V, f"{name}: slave")
-        rigid = isinstance(master, Rigid)
+        if not isinstance(master, (Surface, Obstacle)) and hasattr(master, "shape"):
+            master = Obstacle.like(master)  # a scene's Rigid
+        rigid = isinstance(master, Obstacle)
         if not rigid:
             if _check_space(master.V, f"{name}: master") != self.gdim:
                 raise ContactSetupError(f"{name}: slave and master meshes differ in dimension")
@@ -376,13 +340,14 @@ class NodeToSurface:
 
     # ------------------------------------------------------------- set-up
     def _given(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
-               pairing_iterations) -> ContactPair:
-        """The parameters as given, checked by the scene's rules (the same one-line
-        messages as a scene file's ``[[contact]]``); defaults still to be resolved."""
+               pairing_iterations) -> ContactSettings:
+        """The parameters as given, checked by the contact settings' rules (the same
+        one-line messages as a scene file's ``[[contact]]``); defaults still to be
+        resolved."""
         try:
-            given = ContactPair("slave", "master", K=K, sigma_inf=sigma_inf, c0=c0, mu=mu,
-                                stick_slope=stick_slope, tangent=tangent,
-                                pairing_iterations=pairing_iterations)
+            given = ContactSettings(K=K, sigma_inf=sigma_inf, c0=c0, mu=mu,
+                                    stick_slope=stick_slope, tangent=tangent,
+                                    pairing_iterations=pairing_iterations)
             if E is not None:
                 modulus(E, "E")
         except SceneError as error:
@@ -396,9 +361,9 @@ class NodeToSurface:
                                     f"the default {', '.join(defaulted)}, or give them")
         return given
 
-    def _parameters(self, given: ContactPair, law: Optional[Law],
+    def _parameters(self, given: ContactSettings, law: Optional[Law],
                     E: Optional[float]) -> "_Parameters":
-        """Resolve the defaults with the slave node spacing (:meth:`ContactPair.resolved`)."""
+        """Resolve the defaults with the slave node spacing (:meth:`ContactSettings.resolved`)."""
         pair = given.resolved(E or 1.0, self.spacing)
         for key in ("K", "stick_slope"):
             value = getattr(pair, key)
@@ -422,11 +387,12 @@ class NodeToSurface:
             return existing
         mesh = V.mesh
         name = self._body_names[0 if group == "slave" else 1]
-        body = Body(name, E=1.0, nu=0.0, thickness=float(thickness))
+        rules.name(name, "body.name")  # the scene's rules of a body's name and thickness
+        thickness = rules.number(gt=0)(float(thickness), "body.thickness")
         groups = {group: (mesh.topology.dim - 1, facets)}
         X = V.tabulate_dof_coordinates()[:, : self.gdim].copy()
-        f = BodyField(body, BodyMesh(body.name, mesh, groups), V, compat.function(V), block,
-                      self.layout.nodes(block), X)
+        f = BodyField(name, thickness, BodyMesh(name, mesh, groups), V, compat.function(V),
+                      block, self.layout.nodes(block), X)
         self._fields.append(f)
         return f
 

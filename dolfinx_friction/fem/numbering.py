@@ -8,14 +8,15 @@ rigid nodes; the scalar dof of node ``N``, component ``c`` is ``N*gdim + c``.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 from mpi4py import MPI
 
 from dolfinx_friction import _compat as compat
-from dolfinx_friction.io.gmsh import BodyMesh
-from dolfinx_friction.scene.model import Body
+from dolfinx_friction.fem.tagged_mesh import BodyMesh
 
 
 class DofLayout:
@@ -64,9 +65,11 @@ class DofLayout:
 
 @dataclass
 class BodyField:
-    """A deformable body: its mesh, function space, displacement and system numbering."""
+    """A deformable body: its mesh, function space, displacement and system numbering;
+    ``thickness`` is the out-of-plane thickness of a 2D body (scales its areas)."""
 
-    body: Body
+    name: str
+    thickness: float
     mesh: BodyMesh
     V: object  # dolfinx FunctionSpace (vector Lagrange)
     u: object  # dolfinx Function
@@ -103,17 +106,23 @@ class BodyField:
         return np.flatnonzero(marks[:, 0] > 0)
 
 
-def make_fields(comm: MPI.Comm, bodies: list[tuple[Body, BodyMesh]], n_rigid: int
+def make_fields(comm: MPI.Comm, meshes: Sequence[BodyMesh], n_rigid: int,
+                degrees: Optional[Sequence[Optional[int]]] = None,
+                thicknesses: Optional[Sequence[float]] = None
                 ) -> tuple[list[BodyField], DofLayout]:
-    """Function spaces for all bodies and the system numbering joining them."""
+    """Function spaces for all bodies and the system numbering joining them: body ``k``
+    (named ``meshes[k].name``) of degree ``degrees[k]`` (None, the default: the geometry
+    degree of its mesh) and thickness ``thicknesses[k]`` (default 1)."""
+    degrees = list(degrees) if degrees is not None else [None] * len(meshes)
+    thicknesses = list(thicknesses) if thicknesses is not None else [1.0] * len(meshes)
     spaces = []
-    for body, bm in bodies:
-        degree = body.degree or compat.geometry_degree(bm.mesh)
-        spaces.append(compat.vector_space(bm.mesh, degree))
+    for bm, degree in zip(meshes, degrees):
+        spaces.append(compat.vector_space(bm.mesh, degree or compat.geometry_degree(bm.mesh)))
     layout = DofLayout(comm, [V.dofmap.index_map for V in spaces], n_rigid)
     fields = []
-    for b, ((body, bm), V) in enumerate(zip(bodies, spaces)):
+    for b, (bm, V, thickness) in enumerate(zip(meshes, spaces, thicknesses)):
         gdim = bm.mesh.geometry.dim
         X = V.tabulate_dof_coordinates()[:, :gdim].copy()
-        fields.append(BodyField(body, bm, V, compat.function(V), b, layout.nodes(b), X))
+        fields.append(BodyField(bm.name, float(thickness), bm, V, compat.function(V), b,
+                                layout.nodes(b), X))
     return fields, layout

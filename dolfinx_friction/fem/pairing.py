@@ -21,7 +21,7 @@ from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, Ele
                                               rigid_kinematics)
 from dolfinx_friction.contact.friction import FrictionState
 from dolfinx_friction.contact.projection import clearances
-from dolfinx_friction.scene.model import Rigid
+from dolfinx_friction.fem.obstacles import Obstacle
 from dolfinx_friction.fem.surfaces import MasterFaces, SlaveNodes
 
 
@@ -58,7 +58,7 @@ class RigidMaster:
     ``node = None``, the prescribed ``translation`` (gdim,) (no dofs: its element
     couples the slave node alone)."""
 
-    rigid: Rigid
+    rigid: Obstacle
     node: Optional[int] = None
     translation: Optional[np.ndarray] = None
 

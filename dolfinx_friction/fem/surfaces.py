@@ -29,7 +29,7 @@ def face_type_of(field: BodyField) -> FaceType:
     try:
         return FACE_TYPES[_FACE_TYPE[(cell, degree)]]
     except KeyError:
-        raise ValueError(f"body {field.body.name!r}: no contact face for {cell} cells of degree "
+        raise ValueError(f"body {field.name!r}: no contact face for {cell} cells of degree "
                          f"{degree}") from None
 
 
@@ -103,7 +103,7 @@ class SlaveNodes:
         """``A_p`` on the faces as deformed by the body's current displacement."""
         f = self.field
         x = f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)]
-        thickness = out_of_plane(f.body.thickness, f.gdim)
+        thickness = out_of_plane(f.thickness, f.gdim)
         areas = thickness * face_areas(self.face, x[self._facet_nodes])
         share = np.zeros((self._facet_nodes.size, f.gdim))
         share[:, 0] = (areas[:, None] * np.asarray(self.face.area_weights)[None, :]).ravel()

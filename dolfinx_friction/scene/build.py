@@ -10,6 +10,8 @@ drives it.
 """
 from __future__ import annotations
 
+import dataclasses
+from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
@@ -23,11 +25,25 @@ from dolfinx_friction.io import gmsh as gmsh_io
 from dolfinx_friction.fem.contact_fields import nodal_fields
 from dolfinx_friction.fem.materials import bulk_modulus, lame, out_of_plane
 from dolfinx_friction.fem.numbering import BodyField, make_fields
+from dolfinx_friction.fem.obstacles import Obstacle
 from dolfinx_friction.scene import validation
 from dolfinx_friction.scene.model import Body, ContactPair, Scene
 from dolfinx_friction.scene.validation import ModelError
 from dolfinx_friction.fem.node_to_surface import ContactSetupError, NodeToSurface, Surface, make_law
 from dolfinx_friction.fem.block_problem import BlockProblem
+
+
+@dataclass
+class SceneField(BodyField):
+    """A body's field (:class:`~dolfinx_friction.fem.numbering.BodyField`) with the
+    scene's :class:`~dolfinx_friction.scene.model.Body` it was made for (its material)."""
+
+    body: Body
+
+    @classmethod
+    def of(cls, field: BodyField, body: Body) -> "SceneField":
+        return cls(**{f.name: getattr(field, f.name) for f in dataclasses.fields(field)},
+                   body=body)
 
 
 def _lame(body: Body, gdim: int) -> tuple[float, float]:
@@ -139,8 +155,11 @@ class DiscreteScene:
         self.meshes = meshes or gmsh_io.load_mesh(scene.mesh, names, comm)
         self.gdim = self.meshes.gdim
         validation.check_groups(scene, self.meshes)
-        self.fields, self.layout = make_fields(
-            comm, [(b, self.meshes.bodies[b.name]) for b in scene.bodies], len(scene.rigids))
+        fields, self.layout = make_fields(
+            comm, [self.meshes.bodies[b.name] for b in scene.bodies], len(scene.rigids),
+            degrees=[b.degree for b in scene.bodies],
+            thicknesses=[b.thickness for b in scene.bodies])
+        self.fields = [SceneField.of(f, b) for f, b in zip(fields, scene.bodies)]
         validation.check_solvable(scene)
         validation.check_held(scene, self.meshes.group_bodies)
         validation.check_bcs(scene, self.fields, self.meshes.group_bodies, comm)
@@ -148,10 +167,10 @@ class DiscreteScene:
                       for i, c in enumerate(scene.contacts)}
 
     # ------------------------------------------------------------ lookups
-    def body_field(self, name: str) -> BodyField:
+    def body_field(self, name: str) -> SceneField:
         return next(f for f in self.fields if f.body.name == name)
 
-    def group_fields(self, group: str) -> list[BodyField]:
+    def group_fields(self, group: str) -> list[SceneField]:
         return [self.body_field(b) for b in self.meshes.group_bodies.get(group, ())]
 
     def rigid_node(self, name: str) -> int:
@@ -180,7 +199,8 @@ class DiscreteScene:
         fdim = self.gdim - 1
         slave_tags, _ = slave_field.mesh.meshtags(fdim, [pair.slave])
         if rigid is not None:
-            master, index = rigid, [r.name for r in self.scene.rigids].index(rigid.name)
+            master = Obstacle.like(rigid)  # as given (rigid_plane would make unit vectors)
+            index = [r.name for r in self.scene.rigids].index(rigid.name)
         else:
             master_field = self.group_fields(pair.master)[0]
             master = Surface(master_field.V, master_field.mesh.meshtags(fdim, [pair.master])[0], 1)
