@@ -22,7 +22,8 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn, Optional, Union
+from typing import Any, NoReturn
+
 
 class SceneError(ValueError):
     """An invalid scene: ``<file>: <key path> [= <value>]: <what is wrong>``.
@@ -31,13 +32,13 @@ class SceneError(ValueError):
     ``detail`` (the message without the file).
     """
 
-    def __init__(self, detail: str, *, key: Optional[str] = None, source: Optional[str] = None):
+    def __init__(self, detail: str, *, key: str | None = None, source: str | None = None):
         self.detail = detail
         self.key = key
         self.source = source
         super().__init__(f"{source}: {detail}" if source else detail)
 
-    def with_source(self, source: Union[str, Path]) -> "SceneError":
+    def with_source(self, source: str | Path) -> SceneError:
         return SceneError(self.detail, key=self.key, source=str(source))
 
 
@@ -78,7 +79,7 @@ def suggest(word: str, candidates: Sequence[str]) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
-def join(prefix: str, name: Union[str, int]) -> str:
+def join(prefix: str, name: str | int) -> str:
     """The key path ``prefix.name`` (``name`` alone at the top level)."""
     return f"{prefix}.{name}" if prefix else str(name)
 
@@ -150,7 +151,7 @@ def modulus(value: Any, key: str) -> float:
     return E
 
 
-def penalty(value: Any, key: str) -> Union[float, str]:
+def penalty(value: Any, key: str) -> float | str:
     """``K`` or ``stick_slope``: a number > 0, or ``"calculix"`` for CalculiX's rule."""
     if isinstance(value, str):
         if value == CALCULIX:
@@ -205,7 +206,7 @@ class Key:
 
     check: Check
     required: bool = False
-    field: Optional[str] = None
+    field: str | None = None
 
 
 @dataclass(frozen=True)
@@ -219,7 +220,7 @@ class Rules:
 
 
 #: The key path of the object being built (set by the scene reader: ``contact.0``).
-_PLACE: ContextVar[Optional[str]] = ContextVar("place", default=None)
+_PLACE: ContextVar[str | None] = ContextVar("place", default=None)
 
 
 @contextlib.contextmanager

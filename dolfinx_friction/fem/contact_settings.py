@@ -11,14 +11,23 @@ for CalculiX's rules.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, Optional, Union
+from typing import Any
 
 from dolfinx_friction import rules as r
 from dolfinx_friction.rules import CALCULIX, Key, Rules, validate
 
-__all__ = ["CALCULIX", "KEYS", "LAWS", "TANGENTS", "PENALTY_PER_SPACING",
-           "STICK_SLOPE_PER_SPACING", "ContactSettings", "check_law", "defaults",
-           "pressure_table"]
+__all__ = [
+    "CALCULIX",
+    "KEYS",
+    "LAWS",
+    "PENALTY_PER_SPACING",
+    "STICK_SLOPE_PER_SPACING",
+    "TANGENTS",
+    "ContactSettings",
+    "check_law",
+    "defaults",
+    "pressure_table",
+]
 
 LAWS = ("linear", "exponential", "tabular", "hard")
 TANGENTS = ("consistent", "calculix")
@@ -90,7 +99,7 @@ KEYS: dict[str, Key] = {
 }
 
 
-def defaults(settings: Any, E_slave: float, spacing: Optional[float] = None) -> dict:
+def defaults(settings: Any, E_slave: float, spacing: float | None = None) -> dict:
     """The settings of ``settings`` (a :class:`ContactSettings` or a scene ``ContactPair``)
     whose defaults depend on the slave body, resolved (docs/theory.md §8, scene-format.md
     version 2): ``law`` (``"hard"`` is ``"linear"``), ``K``, ``sigma_inf``, ``c0``,
@@ -109,13 +118,12 @@ def defaults(settings: Any, E_slave: float, spacing: Optional[float] = None) -> 
             return per_spacing * E_slave / spacing
         return value
 
-    return dict(
-        law="linear" if settings.law == "hard" else settings.law,
-        K=rule(settings.K, PENALTY_PER_SPACING, 50.0),
-        sigma_inf=settings.sigma_inf if settings.sigma_inf is not None else E_slave / 70000.0,
-        c0=settings.c0 if settings.c0 is not None else 1e-3,
-        stick_slope=rule(settings.stick_slope, STICK_SLOPE_PER_SPACING, 0.5),
-    )
+    sigma_inf = settings.sigma_inf
+    return {"law": "linear" if settings.law == "hard" else settings.law,
+            "K": rule(settings.K, PENALTY_PER_SPACING, 50.0),
+            "sigma_inf": sigma_inf if sigma_inf is not None else E_slave / 70000.0,
+            "c0": settings.c0 if settings.c0 is not None else 1e-3,
+            "stick_slope": rule(settings.stick_slope, STICK_SLOPE_PER_SPACING, 0.5)}
 
 
 @dataclass(frozen=True)
@@ -125,13 +133,13 @@ class ContactSettings:
     (:meth:`resolved`)."""
 
     law: str = "linear"
-    K: Union[float, str, None] = None  # None: the default; CALCULIX: 50 E
-    sigma_inf: Optional[float] = None
-    c0: Optional[float] = None
-    p0: Optional[float] = None
-    table: Optional[tuple[tuple[float, float], ...]] = None  # (pressure, overclosure)
+    K: float | str | None = None  # None: the default; CALCULIX: 50 E
+    sigma_inf: float | None = None
+    c0: float | None = None
+    p0: float | None = None
+    table: tuple[tuple[float, float], ...] | None = None  # (pressure, overclosure)
     mu: float = 0.0
-    stick_slope: Union[float, str, None] = None  # None: the default; CALCULIX: E/2
+    stick_slope: float | str | None = None  # None: the default; CALCULIX: E/2
     tangent: str = "consistent"
     #: Newton iterations per increment in which slave nodes are re-paired (CalculiX: 8)
     pairing_iterations: int = 8
@@ -139,7 +147,7 @@ class ContactSettings:
     def __post_init__(self) -> None:
         validate(self, RULES)
 
-    def resolved(self, E_slave: float, spacing: Optional[float] = None) -> "ContactSettings":
+    def resolved(self, E_slave: float, spacing: float | None = None) -> ContactSettings:
         """The defaults filled (:func:`defaults`)."""
         return replace(self, **defaults(self, E_slave, spacing))
 

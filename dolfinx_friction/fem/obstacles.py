@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import Any
 
 from dolfinx_friction import rules as r
 from dolfinx_friction.errors import ContactSetupError
@@ -31,11 +31,11 @@ class Obstacle:
 
     name: str
     shape: str  # one of SHAPES
-    point: Optional[Vector] = None
-    normal: Optional[Vector] = None
-    center: Optional[Vector] = None
-    axis: Optional[Vector] = None
-    radius: Optional[float] = None
+    point: Vector | None = None
+    normal: Vector | None = None
+    center: Vector | None = None
+    axis: Vector | None = None
+    radius: float | None = None
 
     def __post_init__(self) -> None:
         validate(self, RULES)

@@ -11,11 +11,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-from mpi4py import MPI
-
 import dolfinx
 import dolfinx.mesh
+import numpy as np
+from mpi4py import MPI
 
 __all__ = ["BodyMesh"]
 
