@@ -335,7 +335,8 @@ def tags_of(tags, mesh: dolfinx.mesh.Mesh) -> bool:
     ``tags.topology``, 0.5's ``tags.mesh.topology``; pybind11 and nanobind hand out one
     wrapper per C++ object)."""
     topology = tags.topology if NEW_API else tags.mesh.topology
-    return topology is mesh.topology
+    ours = getattr(mesh.topology, "_cpp_object", mesh.topology)  # 0.10+: a Python wrapper
+    return getattr(topology, "_cpp_object", topology) is ours
 
 
 def scalar_constant(mesh: dolfinx.mesh.Mesh, value: float):
