@@ -573,9 +573,6 @@ class NodeToSurface:
             dofs = np.where(fixed[at] == dofs, -1, dofs)
         return dofs
 
-    def _element_rows(self) -> np.ndarray:
-        return self._interaction.elements.candidate
-
     def add_residual(self, b: PETSc.Vec, bcs: Sequence = ()) -> None:
         """Add the contact forces (internal forces: residual = internal - external) into
         ``b`` (collective; ``b`` is assembled afterwards)."""
