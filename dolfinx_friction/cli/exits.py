@@ -30,7 +30,7 @@ _INPUT_ERRORS = (("dolfinx_friction.scene.validation", "SceneError"),
                  ("dolfinx_friction.io.reader", "ResultsError"),
                  ("dolfinx_friction.cli.sweep", "SweepError"),
                  ("dolfinx_friction.cli.commands", "UsageError"))
-_DIVERGED_ERRORS = (("dolfinx_friction.scene.driver", "ConvergenceError"),)
+_DIVERGED_ERRORS = (("dolfinx_friction.errors", "ConvergenceError"),)
 
 
 def signal_status(signum: int) -> int:

@@ -185,6 +185,7 @@ class BlockProblem:
         #: the rows' internal forces (residual + f_ext, before constraining) at the last
         #: evaluation: reactions are their sums over the constrained rows of a group
         self.internal = np.zeros(n)
+        self._forces = np.zeros(3)  # squared norms: reactions, external, contact forces
         self.timers = Timers()
         self._bc_rows = self._dolfinx_bc_rows()
         self._prescribed_rows = np.zeros(0, dtype=np.int64)
@@ -351,12 +352,80 @@ class BlockProblem:
                 c.add_residual(b)
         r = b.getArray()
         self.internal = r + self.f_ext
+        self._forces = np.array([self.internal[self.constrained_rows] @ self.internal[
+            self.constrained_rows], self.f_ext @ self.f_ext, (r - values) @ (r - values)])
         r[self.constrained_rows] = 0.0
         b.setArray(r)
         norm = b.norm()
         if np.isfinite(norm):
             self._floor, self._floor_x = None, x  # computed on demand
         return norm
+
+    def force_scale(self) -> float:
+        """The size of the forces at the last :meth:`residual` (collective): the largest of
+        the 2-norms of the reactions (the internal forces of the constrained rows), the
+        external forces and the contact forces [force].  What the residual is small against
+        (:class:`~dolfinx_friction.Newton`'s target and :meth:`postcondition`)."""
+        return float(np.sqrt(self.comm.allreduce(self._forces).max()))
+
+    def imbalance(self) -> np.ndarray:
+        """(bodies + obstacles, gdim) the force left unbalanced on each body and obstacle at
+        the last :meth:`residual`, summed over all ranks (collective) [force]: the sum of
+        its residual over its free rows.  For a body whose form holds only internal forces
+        (its nodal internal forces sum to zero) that is the sum of the reactions of its
+        constraints, its external loads and the forces the contact pairs transmit to it;
+        a load written into the form counts as external."""
+        d = self.gdim
+        r = self.b.getArray(readonly=True).reshape(-1, d)
+        offsets = self.layout.block_offsets
+        sums = np.zeros((len(self.bodies) + self.n_obstacles, d))
+        for k in range(len(self.bodies)):
+            sums[k] = r[offsets[k]:offsets[k + 1]].sum(axis=0)
+        for j in range(self.n_obstacles):
+            rows = self.obstacle_rows(j)
+            if len(rows):
+                sums[len(self.bodies) + j] = self.b.getArray(readonly=True)[rows]
+        return self.comm.allreduce(sums)
+
+    def free_rows(self) -> np.ndarray:
+        """(bodies + obstacles, gdim) the number of free (unconstrained) rows of each body
+        and obstacle per direction, over all ranks (collective)."""
+        d, offsets = self.gdim, self.layout.block_offsets
+        free = np.ones(self.layout.n_owned * d, dtype=bool)
+        free[self.constrained_rows] = False
+        free = free.reshape(-1, d)
+        counts = np.zeros((len(self.bodies) + self.n_obstacles, d), dtype=np.int64)
+        for k in range(len(self.bodies)):
+            counts[k] = free[offsets[k]:offsets[k + 1]].sum(axis=0)
+        for j in range(self.n_obstacles):
+            rows = self.obstacle_rows(j)
+            if len(rows):
+                counts[len(self.bodies) + j] = free.reshape(-1)[rows]
+        return self.comm.allreduce(counts)
+
+    def postcondition(self, tolerance: float) -> str:
+        """Why the state of the last :meth:`residual` is not an answer, or "" (collective;
+        the contacts as at their last update): a body or obstacle whose unbalanced force
+        (:meth:`imbalance`) along an axis exceeds ``sqrt(n) tolerance``, with n its free
+        rows along that axis and ``tolerance`` the residual norm the convergence test
+        accepts (the bound a converged residual keeps: Cauchy-Schwarz), or a slave node
+        whose friction force exceeds mu times its normal force (by more than round-off).
+        :func:`~dolfinx_friction.solve_steps` cuts back an increment that fails it."""
+        imbalance, allowed = np.abs(self.imbalance()), np.sqrt(self.free_rows()) * tolerance
+        ratio = np.divide(imbalance, allowed, out=np.where(imbalance > 0, np.inf, 0.0),
+                          where=allowed > 0)
+        k, axis = np.unravel_index(np.argmax(ratio), ratio.shape)
+        if ratio[k, axis] > 1.0:
+            n_bodies = len(self.bodies)
+            who = (f"body {self.names[k]}" if k < n_bodies else f"obstacle {k - n_bodies}")
+            return (f"{who} unbalanced by {imbalance[k, axis]:.3e} along "
+                    f"{'xyz'[axis]} (allowed {allowed[k, axis]:.3e})")
+        for c in self.contacts:
+            excess = self.comm.allreduce(c.coulomb_excess(), op=MPI.MAX)
+            if excess > 0.0:
+                return (f"{c.name}: a friction force exceeds mu times its normal force by "
+                        f"{excess:.3e}")
+        return ""
 
     def roundoff_floor(self) -> float:
         """The round-off of the last :meth:`residual`'s norm (collective): 2 eps times the
@@ -546,6 +615,8 @@ class BlockProblem:
                                                 self.gdim))])
         labels = ([repr(str(n)) for n in names] if names is not None
                   else [str(k) for k in range(len(self.bodies))])
+        #: the bodies' names in messages (quoted) or numbers
+        self.names = labels
         motions = RigidMotions(self.comm, X, self.n_obstacles, labels)
         for k, body in enumerate(self.bodies):
             motions.add_stiffness(k, body.A, X[k])

@@ -680,6 +680,17 @@ class NodeToSurface:
                 out.slip[s] = np.linalg.norm(r.trial.g_p, axis=1)
         return out
 
+    def coulomb_excess(self) -> float:
+        """By how much the largest friction force of this rank's slave nodes exceeds mu
+        times the magnitude of its normal force (a law's tension range holds by friction
+        too), beyond round-off (1e-9 of the largest normal force): 0.0 where Coulomb's law
+        holds [force]."""
+        r = self._interaction.elements.result
+        if r is None or not len(r.F_N):
+            return 0.0
+        excess = np.linalg.norm(r.F_T, axis=1) - self.mu * np.abs(r.F_N)
+        return max(float(excess.max()) - 1e-9 * float(np.abs(r.F_N).max()), 0.0)
+
     def force(self) -> np.ndarray:
         """(gdim,) total contact force on the slave body, summed over all ranks
         (collective)."""

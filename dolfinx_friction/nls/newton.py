@@ -129,7 +129,7 @@ class Newton:
                 reactions = self._reactions(problem, reactions, trace)
             if it and norm < best:
                 best, best_at = norm, it
-            target = max(self.rtol * trace.residuals[0], self.atol)
+            target = self.target(problem, trace.residuals[0])
             floor = _floor_if_near(problem, norm, target, floor, it == 0)
             if norm <= max(target, floor) or (
                     settling and settled(trace, problem, x, x_n, reactions, self.reaction_tol)):
@@ -164,6 +164,26 @@ class Newton:
         if trace.converged:
             problem.check_held()
         return trace
+
+    def target(self, problem: BlockProblem, first: float) -> float:
+        """The residual norm that converges at the last evaluated iterate (collective):
+        ``rtol`` times the smaller of the increment's ``first`` residual and the forces now
+        (:meth:`BlockProblem.force_scale`), at least ``atol``.  A first residual that a
+        prescribed jump on a stiff body inflates far above the forces the increment carries
+        would otherwise accept an iterate whose unbalanced force is a fair share of them."""
+        return max(self.rtol * min(first, problem.force_scale()), self.atol)
+
+    def residual_tolerance(self, problem: BlockProblem) -> float:
+        """The largest residual norm the convergence test accepts at the last evaluated
+        (converged) iterate: the :meth:`target` against the forces, or the round-off
+        floor; with ``convergence="reactions"`` also ``sqrt(rows) reaction_tol`` times the
+        forces (:func:`settled` bounds every row by ``reaction_tol`` times them).  What
+        :meth:`BlockProblem.postcondition` checks the increment against."""
+        force = problem.force_scale()
+        tolerance = max(self.rtol * force, self.atol, problem.roundoff_floor())
+        if self.convergence == "reactions":
+            tolerance = max(tolerance, np.sqrt(problem.x.getSize()) * self.reaction_tol * force)
+        return tolerance
 
     @staticmethod
     def _reactions(problem: BlockProblem, last: Optional[np.ndarray],

@@ -2,9 +2,10 @@
 
 A step ramps what ``load(t)`` prescribes from pseudo-time 0 to 1.  An increment whose
 Newton iteration fails, whose converged state is not finite (displacements, reactions,
-contact values), or in which a whole contact zone vanishes off its master, is
-retried at half the size after the displacement and the friction history are rolled
-back; the history is committed only on convergence.
+contact values), leaves a body unbalanced or a slave node beyond Coulomb (the
+postcondition), or in which a whole contact zone vanishes off its master, is retried at
+half the size after the displacement and the friction history are rolled back; the
+history is committed only on convergence.
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from dolfinx_friction.errors import ConvergenceError
 from dolfinx_friction.nls.newton import Newton, NewtonTrace
 from dolfinx_friction.fem.block_problem import BlockProblem
 
@@ -29,6 +31,11 @@ class IncrementRecord:
     work: int  # Newton iterations spent on it, failed attempts included
     penetration: dict[str, float] = field(default_factory=dict)  # per contact: overclosure
     detached: dict[str, int] = field(default_factory=dict)  # per contact: slid off
+    #: the largest force left unbalanced on a body or obstacle along an axis
+    #: (:meth:`BlockProblem.imbalance`) and the size of the forces
+    #: (:meth:`BlockProblem.force_scale`) [force]
+    imbalance: float = 0.0
+    force: float = 0.0
 
     @property
     def iterations(self) -> int:
@@ -37,20 +44,6 @@ class IncrementRecord:
     @property
     def residuals(self) -> list[float]:
         return self.trace.residuals
-
-
-class ConvergenceError(RuntimeError):
-    """An increment failed after all cutbacks: ``increment`` (1, 2, ...) starting at
-    pseudo-time ``t``, the last residual norm, the converged ``records`` before it, and the
-    cutbacks and Newton iterations spent on the failed increment."""
-
-    def __init__(self, increment: int, t: float, residual: float, max_cutbacks: int,
-                 records: list, cutbacks: int, iterations: int, reason: str = ""):
-        super().__init__(f"increment {increment} at t = {t:.6g}: Newton did not converge "
-                         f"after {max_cutbacks} cutbacks (last residual {residual:.3e}"
-                         + (f": {reason})" if reason else ")"))
-        self.increment, self.t, self.residual, self.reason = increment, t, residual, reason
-        self.records, self.cutbacks, self.iterations = records, cutbacks, iterations
 
 
 #: why an increment whose Newton iteration converged is not a result (see :func:`_finite`)
@@ -101,8 +94,8 @@ class IncrementSize:
 
 def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments: int = 1,
                 newton: Optional[Newton] = None, max_cutbacks: int = 6,
-                on_increment: Optional[Callable[[IncrementRecord], None]] = None
-                ) -> list[IncrementRecord]:
+                on_increment: Optional[Callable[[IncrementRecord], None]] = None,
+                postcondition: bool = True) -> list[IncrementRecord]:
     """Ramp what ``load(t)`` prescribes from pseudo-time 0 to 1 in ``increments`` equal
     increments; returns the converged increments.
 
@@ -111,8 +104,11 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
     :attr:`BlockProblem.f_ext`.  The displacement rate of the last increment predicts the
     next one (the first iterate: what the contacts measure at the start of an increment is
     taken from the converged state, so the predictor changes no answer).  ``on_increment``
-    sees each converged increment before its history is committed.  Raises
-    :class:`ConvergenceError`.
+    sees each converged increment before its history is committed.  ``postcondition``:
+    an increment is accepted only where every body balances and every slave node obeys
+    Coulomb (:meth:`BlockProblem.postcondition` against the residual the convergence test
+    accepts, :meth:`Newton.residual_tolerance`); one that does not is cut back like one
+    that diverged.  Raises :class:`~dolfinx_friction.ConvergenceError`.
     """
     newton = newton or Newton()
     x = problem.x
@@ -133,6 +129,9 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
         ok, why = trace.converged, trace.reason
         if ok and not _finite(problem):
             ok, why = False, NON_FINITE  # never a result: cut back
+        if ok and postcondition:
+            why = problem.postcondition(newton.residual_tolerance(problem))
+            ok = not why
         if ok and size.level < max_cutbacks and any(c.zone_vanished()
                                                     for c in problem.contacts):
             ok = False  # too coarse to tell a slide off the master from a lost contact
@@ -144,8 +143,12 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
             size.failed()
             failures += 1
             if size.level > max_cutbacks:
-                raise ConvergenceError(len(records) + 1, t, trace.residuals[-1], max_cutbacks,
-                                       records, failures, spent, problem.inadmissible or why)
+                why = problem.inadmissible or why
+                raise ConvergenceError(
+                    f"increment {len(records) + 1} at t = {t:.6g}: Newton did not converge "
+                    f"after {max_cutbacks} cutbacks (last residual {trace.residuals[-1]:.3e}"
+                    + (f": {why})" if why else ")"), len(records) + 1, t, trace.residuals[-1],
+                    why, records, failures, spent)
             continue
         size.converged(trace.iterations)
         rate = rate if rate is not None else x.duplicate()
@@ -154,7 +157,9 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
         t += dt
         record = IncrementRecord(len(records) + 1, t, trace, failures, spent,
                                  {c.name: c.penetration() for c in problem.contacts},
-                                 {c.name: c.detached() for c in problem.contacts})
+                                 {c.name: c.detached() for c in problem.contacts},
+                                 float(np.abs(problem.imbalance()).max(initial=0.0)),
+                                 problem.force_scale())
         failures, spent = 0, 0
         records.append(record)
         if on_increment is not None:

@@ -14,6 +14,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from dolfinx_friction.errors import ConvergenceError
 from dolfinx_friction.nls import stepping
 from dolfinx_friction.nls.newton import Newton
 from dolfinx_friction.scene.build import ContactProblem
@@ -22,10 +23,6 @@ from dolfinx_friction.nls.stepping import IncrementRecord
 from dolfinx_friction.fem.block_problem import Timers
 from dolfinx_friction.fem.loads import unit_loads
 from dolfinx_friction.fem.materials import out_of_plane
-
-
-class ConvergenceError(RuntimeError):
-    """An increment failed after all cutbacks."""
 
 
 @dataclass
@@ -50,6 +47,8 @@ class Increment:
     rigid_f: dict[str, np.ndarray]
     penetration: dict[str, float]  # largest overclosure / slave spacing, per contact pair
     detached: dict[str, int]  # nodes in contact before that slid off the master surface
+    imbalance: float  # largest unbalanced force on a body along an axis [force]
+    force: float  # size of the forces (reactions, loads, contact) [force]
 
 
 @dataclass
@@ -219,7 +218,7 @@ class Solver:
             try:
                 stepping.solve_steps(self.system, load, step.increments, newton,
                                      step.max_cutbacks, converged)
-            except stepping.ConvergenceError as exc:
+            except ConvergenceError as exc:
                 summary.cutbacks += exc.cutbacks
                 summary.newton_iterations += exc.iterations
                 reason = (f"step {index} ({step.name!r}), increment {exc.increment} at "
@@ -228,7 +227,8 @@ class Solver:
                           + (f": {exc.reason})" if exc.reason else ")"))
                 summary.failure = reason
                 summary.wall = time.perf_counter() - start
-                raise ConvergenceError(reason) from None
+                raise ConvergenceError(reason, exc.increment, exc.t, exc.residual, exc.reason,
+                                       exc.records, exc.cutbacks, exc.iterations) from None
         summary.converged = True
         summary.wall = time.perf_counter() - start
         return summary
@@ -254,5 +254,6 @@ class Solver:
         return Increment(index, name, record.number, index + record.t, trace.iterations,
                          trace.residuals[-1], trace.residuals, trace.status_changes,
                          trace.face_changes, trace.backtracks, active, slipping, wall,
-                         reactions, rigid_u, rigid_f, record.penetration, record.detached)
+                         reactions, rigid_u, rigid_f, record.penetration, record.detached,
+                         record.imbalance, record.force)
 
