@@ -109,7 +109,7 @@ if comm.size == 1 and pyvista is not None and not args.no_picture:
     from dolfinx_friction._compat import vtk_mesh  # the deformed block, by contact status
     grid = pyvista.UnstructuredGrid(*vtk_mesh(V))
     grid.points[:, :2] += u.x.array.reshape(-1, 2)
-    grid.point_data["status"] = contact.fields()["contact_status"].x.array
+    grid.point_data["status"] = contact.fields()["status"].x.array
     plotter = pyvista.Plotter(off_screen=True, window_size=(900, 450))
     plotter.add_mesh(grid, scalars="status", show_edges=True, clim=[-1, 2], cmap="coolwarm",
                      show_scalar_bar=False)

@@ -739,22 +739,18 @@ class NodeToSurface:
         return tuple(int(c) for c in self.comm.allreduce(np.asarray(self._interaction.counts())))
 
     def fields(self) -> dict:
-        """The state as dolfinx Functions on the slave body's mesh (for dolfinx's writers):
-        ``contact_pressure``, ``contact_status``, ``contact_slip`` (scalar) and
-        ``tangential_traction`` (vector), zero (status -1) away from the slave nodes."""
-        st = self.state()
+        """The state as dolfinx Functions on the slave body's mesh, for dolfinx's writers:
+        :func:`~dolfinx_friction.fem.contact_fields.nodal_fields`'s ``contact_pressure``,
+        ``slip`` and ``status`` (scalar) and ``tangential_traction`` (vector), with its
+        names and status codes (0, status -1 away from the slave nodes)."""
+        from dolfinx_friction.fem.contact_fields import nodal_fields
         V = self._slave_field.V
         S = compat.scalar_space(V.mesh, compat.space_degree(V))
+        n_nodes = len(compat.function(S).x.array)
         out = {}
-        for key, values, space in (("contact_pressure", st.pressure, S),
-                                   ("contact_status", st.status, S),
-                                   ("contact_slip", st.slip, S),
-                                   ("tangential_traction", st.traction, V)):
-            g = compat.function(space)
-            width = 1 if values.ndim == 1 else values.shape[1]
-            array = g.x.array.reshape(-1, width)
-            array[:] = NO_ELEMENT if key == "contact_status" else 0.0
-            array[st.nodes] = values.reshape(len(st.nodes), width)
+        for key, values in nodal_fields([self.state()], n_nodes, self.gdim).items():
+            g = compat.function(V if values.shape[1] > 1 else S)
+            g.x.array[:] = values.ravel()
             compat.scatter_forward(g)
             g.name = key
             out[key] = g

@@ -15,8 +15,8 @@ from dolfinx import fem, mesh
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from dolfinx_friction import (BlockProblem, ContactSetupError, Newton, NodeToSurface, Surface,
-                              create_matrix, rigid_plane, snes_solve, solve_steps)
+from dolfinx_friction import (NO_ELEMENT, BlockProblem, ContactSetupError, Newton, NodeToSurface,
+                              Surface, create_matrix, rigid_plane, snes_solve, solve_steps)
 from dolfinx_friction import _compat as compat
 
 E, NU = 1000.0, 0.3
@@ -479,3 +479,26 @@ def test_default_penalty_scales_with_the_slave_node_spacing(cell):
     finer, ftags = block(0.0, 0.0, 1.0, 0.5, 16, 2, cell)
     halved = NodeToSurface(Surface(finer, ftags, BOTTOM), plane, E=E, mu=0.3)
     assert halved.law.K == pytest.approx(2 * contact.law.K, rel=1e-12)
+
+
+def test_fields_are_the_state_on_the_slave_mesh():
+    """contact.fields(): the nodal fields' names and status codes as dolfinx Functions; at
+    every slave node with an element they hold the state's values, elsewhere 0 and -1
+    (P2: midside nodes included)."""
+    problem, contact = on_plane(degree=2, cell=mesh.CellType.triangle)
+    press_and_slide(problem, contact, increments=(2, 1))
+    fields = contact.fields()
+    assert sorted(fields) == ["contact_pressure", "slip", "status", "tangential_traction"]
+    st = contact.state()
+    s = st.has_element
+    assert s.any() or MPI.COMM_WORLD.size > 1
+    status = fields["status"].x.array
+    np.testing.assert_array_equal(status[st.nodes[s]], st.status[s])
+    np.testing.assert_array_equal(fields["contact_pressure"].x.array[st.nodes[s]], st.pressure[s])
+    np.testing.assert_array_equal(fields["slip"].x.array[st.nodes[s]], st.slip[s])
+    traction = fields["tangential_traction"].x.array.reshape(-1, 2)
+    np.testing.assert_array_equal(traction[st.nodes[s]], st.traction[s])
+    owned = fields["status"].function_space.dofmap.index_map.size_local  # ghosts: owners' values
+    away = np.setdiff1d(np.arange(owned), st.nodes)
+    assert np.all(status[away] == NO_ELEMENT) and not fields["contact_pressure"].x.array[away].any()
+    assert 2 in statuses(contact)  # the slide reached slip: every status code was written
