@@ -198,18 +198,69 @@ class Newton:
 
     def _line_search(self, problem: BlockProblem, dx: PETSc.Vec, norm0: float,
                      target: float, floor: float) -> tuple[int, Optional[float]]:
-        """Halve the step ``x <- x - dx`` while the residual (pairing frozen) does not
-        decrease and is not converged (at round-off it need not decrease); returns the
-        halvings and the residual norm at the accepted ``x`` (None: not evaluated)."""
+        """Choose the step ``x <- x - alpha dx`` (``x`` enters at ``alpha = 1``, the residual
+        ``b`` still that of ``x + dx``); returns the residuals evaluated beyond the whole
+        step's and the residual norm at the accepted ``x`` (None: not evaluated).
+
+        The whole step is taken where it lowers the residual norm or converges.  Else the
+        slope ``s(alpha) = -dx . R(x + dx - alpha dx)`` decides: the derivative of the
+        potential energy along the step, where the bodies and the contact have one
+        (``s(0) < 0`` for a Newton step on a positive definite Jacobian).  Still negative at
+        the whole step, the energy fell all the way: the step is taken (a node that the
+        step closes raises the residual norm by its penalty force at any fraction of it,
+        and halving the step only shrinks the progress).  Positive, the step went past the
+        minimum along it: ``alpha`` where the slope is within half of ``|s(0)|`` of zero
+        (regula falsi, Illinois; at most :data:`LINE_SEARCH_STEPS` residuals).  Without a
+        descent slope (``s(0) >= 0``: a non-symmetric friction tangent) the step is halved
+        while the residual norm does not decrease (at round-off it need not)."""
+        s0 = -dx.dot(problem.b)
+        norm = self._evaluate(problem, False)
+        floor = _floor_if_near(problem, norm, target, floor, False)
+        if norm <= max((1.0 - 1e-4) * norm0, target, floor):
+            return 0, norm
+        if s0 < 0.0:
+            s1 = -dx.dot(problem.b)
+            return (0, norm) if s1 <= 0.0 else self._slope_search(problem, dx, s0, s1, target,
+                                                                  floor)
         alpha = 1.0
-        for halvings in range(5):
+        for halvings in range(1, LINE_SEARCH_STEPS + 1):
+            alpha *= 0.5
+            problem.x.axpy(alpha, dx)  # back from x - 2 alpha dx to x - alpha dx
             norm = self._evaluate(problem, False)
             floor = _floor_if_near(problem, norm, target, floor, False)
             if norm <= max((1.0 - 1e-4 * alpha) * norm0, target, floor):
                 return halvings, norm
-            alpha *= 0.5
-            problem.x.axpy(alpha, dx)  # back from x - 2 alpha dx to x - alpha dx
-        return 5, None
+        return LINE_SEARCH_STEPS, norm
+
+    def _slope_search(self, problem: BlockProblem, dx: PETSc.Vec, s0: float, s1: float,
+                      target: float, floor: float) -> tuple[int, float]:
+        """Regula falsi (Illinois) for the zero of the slope between ``alpha = 0`` (``s0 <
+        0``) and the whole step (``s1 > 0``, ``x`` there); stops where ``|s| <= |s0| / 2``
+        or the residual converges."""
+        lo, s_lo, hi, s_hi, alpha, side = 0.0, s0, 1.0, s1, 1.0, 0
+        for evaluations in range(1, LINE_SEARCH_STEPS + 1):
+            new = hi - s_hi * (hi - lo) / (s_hi - s_lo)
+            new = min(max(new, lo + 0.02 * (hi - lo)), hi - 0.02 * (hi - lo))
+            problem.x.axpy(alpha - new, dx)
+            alpha = new
+            norm = self._evaluate(problem, False)
+            floor = _floor_if_near(problem, norm, target, floor, False)
+            s = -dx.dot(problem.b)
+            if abs(s) <= 0.5 * abs(s0) or norm <= max(target, floor):
+                break
+            if s > 0.0:
+                hi, s_hi = alpha, s
+                s_lo = s_lo * 0.5 if side == 1 else s_lo  # Illinois: the same side again
+                side = 1
+            else:
+                lo, s_lo = alpha, s
+                s_hi = s_hi * 0.5 if side == -1 else s_hi
+                side = -1
+        return evaluations, norm
+
+
+#: residual evaluations a line search may add to the whole step's
+LINE_SEARCH_STEPS = 5
 
 
 #: the largest relative linear residual of a Newton step (:func:`forcing`): 1e-5 already

@@ -36,6 +36,9 @@ class IncrementRecord:
     #: (:meth:`BlockProblem.force_scale`) [force]
     imbalance: float = 0.0
     force: float = 0.0
+    #: the residual norm the convergence test accepts at the converged iterate
+    #: (:meth:`Newton.residual_tolerance`): ``residuals[-1]`` is at most this [force]
+    tolerance: float = 0.0
 
     @property
     def iterations(self) -> int:
@@ -129,8 +132,9 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
         ok, why = trace.converged, trace.reason
         if ok and not _finite(problem):
             ok, why = False, NON_FINITE  # never a result: cut back
+        tolerance = newton.residual_tolerance(problem) if ok else 0.0
         if ok and postcondition:
-            why = problem.postcondition(newton.residual_tolerance(problem))
+            why = problem.postcondition(tolerance)
             ok = not why
         if ok and size.level < max_cutbacks and any(c.zone_vanished()
                                                     for c in problem.contacts):
@@ -159,7 +163,7 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
                                  {c.name: c.penetration() for c in problem.contacts},
                                  {c.name: c.detached() for c in problem.contacts},
                                  float(np.abs(problem.imbalance()).max(initial=0.0)),
-                                 problem.force_scale())
+                                 problem.force_scale(), tolerance)
         failures, spent = 0, 0
         records.append(record)
         if on_increment is not None:

@@ -38,7 +38,7 @@ class Increment:
     residuals: list[float]
     status_changes: list[int]  # per iteration: slave nodes whose contact status changed
     face_changes: list[int]  # per iteration: other slave nodes whose master face changed
-    backtracks: list[int]  # per iteration: line-search halvings
+    backtracks: list[int]  # per iteration: residuals the line search added to the whole step's
     active: int
     slipping: int
     wall: float
@@ -49,6 +49,7 @@ class Increment:
     detached: dict[str, int]  # nodes in contact before that slid off the master surface
     imbalance: float  # largest unbalanced force on a body along an axis [force]
     force: float  # size of the forces (reactions, loads, contact) [force]
+    tolerance: float  # the residual norm the convergence test accepts; residual <= it [force]
 
 
 @dataclass
@@ -255,5 +256,5 @@ class Solver:
                          trace.residuals[-1], trace.residuals, trace.status_changes,
                          trace.face_changes, trace.backtracks, active, slipping, wall,
                          reactions, rigid_u, rigid_f, record.penetration, record.detached,
-                         record.imbalance, record.force)
+                         record.imbalance, record.force, record.tolerance)
 
