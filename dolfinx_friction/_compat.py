@@ -391,52 +391,6 @@ def versions() -> dict[str, str]:
             "petsc": ".".join(map(str, PETSc.Sys.getVersion())), "numpy": np.__version__}
 
 
-def output_spaces(field) -> dict:
-    """Spaces for XDMF output: XDMFFile wants functions of the mesh's geometry degree."""
-    mesh = field.V.mesh
-    g, k = geometry_degree(mesh), space_degree(field.V)
-    scalar = scalar_space(mesh, k)
-    return {"vector_in": field.V, "scalar_in": scalar,
-            "vector_out": field.V if k == g else vector_space(mesh, g),
-            "scalar_out": scalar if k == g else scalar_space(mesh, g)}
-
-
-def _output_function(values: np.ndarray, space_in, space_out, name: str):
-    import dolfinx.fem
-    f = dolfinx.fem.Function(space_in)
-    n = values.size
-    f.x.array[:n] = values.ravel()
-    f.x.scatter_forward()
-    if space_out is not space_in:
-        g = dolfinx.fem.Function(space_out)
-        g.interpolate(f)
-        f = g
-    f.name = name
-    return f
-
-
-def write_fields(path, field, spaces: dict, nodal: dict[str, np.ndarray], t: float,
-                 cell_functions=()) -> None:
-    """Displacement, nodal contact values (owned nodes) and cell functions of a body into
-    one XDMF file."""
-    from dolfinx.io import XDMFFile
-    mesh = field.V.mesh
-    owned = field.n_owned
-    with XDMFFile(mesh.comm, str(path), "w") as xdmf:
-        xdmf.write_mesh(mesh)
-        gd = field.gdim
-        u = field.u.x.array[: owned * gd]
-        xdmf.write_function(_output_function(u, spaces["vector_in"], spaces["vector_out"],
-                                             "displacement"), t)
-        for name, values in nodal.items():
-            vector = values.shape[1] > 1
-            f = _output_function(values[:owned], spaces["vector_in" if vector else "scalar_in"],
-                                 spaces["vector_out" if vector else "scalar_out"], name)
-            xdmf.write_function(f, t)
-        for f in cell_functions:
-            xdmf.write_function(f, t)
-
-
 # ------------------------------------------------------------- MPI launcher
 def open_mpi_major() -> int:
     """Major version of the Open MPI that mpi4py uses (4: Debian 12, 5: Debian 13); 0 if

@@ -53,6 +53,7 @@ import ufl
 from dolfinx_friction import _compat as compat
 
 from dolfinx_friction.io import xdmf_series as time_series
+from dolfinx_friction.io.xdmf_fields import output_spaces, write_fields
 from dolfinx_friction.contact.element import STATUS_NAMES
 from dolfinx_friction.errors import OutputError
 from dolfinx_friction.fem.contact_fields import SLAVE_COLUMNS, slave_rows
@@ -332,7 +333,7 @@ class FieldWriter:
         _silence_hdf5()
         self._size = 0  # bytes of the last increment's field folder and time series
         self._series: dict[str, list[str]] = {f.body.name: [] for f in problem.fields}
-        self.outputs = [compat.output_spaces(f) for f in problem.fields]
+        self.outputs = [output_spaces(f) for f in problem.fields]
         # compiled once: a form compiler cache hit still costs ~10 ms per expression
         self.stresses = [self._stresses(f) for f in problem.fields]
 
@@ -364,8 +365,8 @@ class FieldWriter:
             for f, expression in stresses:
                 f.interpolate(expression)
             try:  # HDF5 writes collectively: every rank sees the failure
-                compat.write_fields(path, field, spaces, self.problem.contact_fields(field), inc.t,
-                                    [f for f, _ in stresses])
+                write_fields(path, field, spaces, self.problem.contact_fields(field), inc.t,
+                             [f for f, _ in stresses])
             except (RuntimeError, OSError) as exc:
                 error = _fault(self.dir / name / path.name, exc)
             if comm.allreduce(error is not None):  # (any rank: the others must stop too)

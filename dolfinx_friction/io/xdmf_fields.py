@@ -1,0 +1,61 @@
+"""One body's fields of one increment in one XDMF file (dolfinx's ``XDMFFile``).
+
+``XDMFFile`` writes functions of the mesh's geometry degree only: the displacement and the
+nodal contact values, held on the body's space of degree k, are interpolated to degree g
+where k != g (:func:`output_spaces`).  Version differences go through :mod:`_compat`.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from dolfinx_friction import _compat as compat
+
+__all__ = ["output_spaces", "write_fields"]
+
+
+def output_spaces(field) -> dict:
+    """The spaces of a body's output: ``vector_in``/``scalar_in`` of its degree,
+    ``vector_out``/``scalar_out`` of its mesh's geometry degree (the same objects where the
+    degrees agree)."""
+    mesh = field.V.mesh
+    g, k = compat.geometry_degree(mesh), compat.space_degree(field.V)
+    scalar = compat.scalar_space(mesh, k)
+    return {"vector_in": field.V, "scalar_in": scalar,
+            "vector_out": field.V if k == g else compat.vector_space(mesh, g),
+            "scalar_out": scalar if k == g else compat.scalar_space(mesh, g)}
+
+
+def _output_function(values: np.ndarray, space_in, space_out, name: str):
+    """A Function named ``name`` on ``space_out`` from owned ``values`` on ``space_in``."""
+    f = compat.function(space_in)
+    n = values.size
+    f.x.array[:n] = values.ravel()
+    compat.scatter_forward(f)
+    if space_out is not space_in:
+        g = compat.function(space_out)
+        g.interpolate(f)
+        f = g
+    f.name = name
+    return f
+
+
+def write_fields(path: Path, field, spaces: dict, nodal: dict[str, np.ndarray], t: float,
+                 cell_functions=()) -> None:
+    """The displacement, the nodal contact values (owned nodes, (n, 1) or (n, gdim)) and
+    the cell functions of a body at pseudo-time ``t`` into one XDMF file (collective)."""
+    from dolfinx.io import XDMFFile
+    mesh = field.V.mesh
+    owned = field.n_owned
+    with XDMFFile(mesh.comm, str(path), "w") as xdmf:
+        xdmf.write_mesh(mesh)
+        u = field.u.x.array[: owned * field.gdim]
+        xdmf.write_function(_output_function(u, spaces["vector_in"], spaces["vector_out"],
+                                             "displacement"), t)
+        for name, values in nodal.items():
+            kind = "vector" if values.shape[1] > 1 else "scalar"
+            xdmf.write_function(_output_function(values[:owned], spaces[f"{kind}_in"],
+                                                 spaces[f"{kind}_out"], name), t)
+        for f in cell_functions:
+            xdmf.write_function(f, t)
