@@ -28,7 +28,8 @@ import dolfinx.mesh
 DOLFINX_VERSION: tuple[int, ...] = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])
 #: True for dolfinx >= 0.9 (the Debian 13 API); False for 0.5-0.8.
 NEW_API: bool = DOLFINX_VERSION >= (0, 9)
-#: True for dolfinx >= 0.10: ``create_mesh(comm, cells, e, x, ...)``, ``dolfinx.io.gmsh``.
+#: True for dolfinx >= 0.10: ``create_mesh(comm, cells, e, x, ...)``, ``dolfinx.io.gmsh``,
+#: ``fem.petsc.create_vector`` from a space.
 API_0_10: bool = DOLFINX_VERSION >= (0, 10)
 #: True for dolfinx >= 0.11: mixed-topology geometry (``cmaps[0]``, ``dofmaps[0]``).
 API_0_11: bool = DOLFINX_VERSION >= (0, 11)
@@ -235,9 +236,10 @@ def petsc_vector(u):
 
 
 def create_vector(L):
-    """A ghosted PETSc vector for a compiled linear form."""
+    """A ghosted PETSc vector for a compiled linear form (0.10+ builds it from the form's
+    test space)."""
     import dolfinx.fem.petsc
-    return dolfinx.fem.petsc.create_vector(L)
+    return dolfinx.fem.petsc.create_vector(L.function_spaces[0] if API_0_10 else L)
 
 
 def create_matrix(a):
