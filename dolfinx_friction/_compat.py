@@ -28,6 +28,11 @@ import dolfinx.mesh
 DOLFINX_VERSION: tuple[int, ...] = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])
 #: True for dolfinx >= 0.9 (the Debian 13 API); False for 0.5-0.8.
 NEW_API: bool = DOLFINX_VERSION >= (0, 9)
+#: True for dolfinx >= 0.10: ``create_mesh(comm, cells, e, x, ...)``, ``dolfinx.io.gmsh``,
+#: ``fem.petsc.create_vector`` from a space.
+API_0_10: bool = DOLFINX_VERSION >= (0, 10)
+#: True for dolfinx >= 0.11: mixed-topology geometry (``cmaps[0]``, ``dofmaps[0]``).
+API_0_11: bool = DOLFINX_VERSION >= (0, 11)
 if not NEW_API and DOLFINX_VERSION != (0, 5):  # pragma: no cover
     import warnings
 
@@ -91,16 +96,25 @@ def create_mesh(comm, cells: np.ndarray, x: np.ndarray, domain) -> dolfinx.mesh.
     """
     cells = np.ascontiguousarray(cells, dtype=np.int64)
     x = np.ascontiguousarray(x, dtype=np.float64)
+    if API_0_10:  # create_mesh(comm, cells, e, x, partitioner=None, max_facet_to_cell_links=2)
+        return dolfinx.mesh.create_mesh(comm, cells, domain, x, _ghostless_partitioner())
     if NEW_API:
         # 0.9: create_mesh(comm, cells, x, e, partitioner=None); the ghost
         # mode is a property of the partitioner.
-        partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.none)
-        return dolfinx.mesh.create_mesh(comm, cells, x, domain, partitioner)
+        return dolfinx.mesh.create_mesh(comm, cells, x, domain, _ghostless_partitioner())
     # 0.5: create_mesh(comm, cells, x, domain, ghost_mode, partitioner); cells as an
     # AdjacencyList (a bare array is first tried against it, and the TypeError's message
     # formats both arrays)
     cells = dolfinx.cpp.graph.AdjacencyList_int64(cells)
     return dolfinx.mesh.create_mesh(comm, cells, x, domain, ghost_mode=dolfinx.mesh.GhostMode.none)
+
+
+def _ghostless_partitioner():
+    """The cell partitioner without ghost cells (0.9, 0.10); from 0.11 it also takes the
+    most cells a facet joins, 2 (a non-branching mesh)."""
+    if DOLFINX_VERSION >= (0, 11):
+        return dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.none, 2)
+    return dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.none)
 
 
 def distribute_entity_data(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray,
@@ -149,10 +163,13 @@ def space_degree(V) -> int:
     return V.ufl_element().degree()
 
 
+def coordinate_element(mesh: dolfinx.mesh.Mesh):
+    """The mesh's coordinate element (``geometry.cmap``; ``geometry.cmaps[0]`` from 0.11)."""
+    return mesh.geometry.cmaps[0] if API_0_11 else mesh.geometry.cmap
+
+
 def geometry_degree(mesh: dolfinx.mesh.Mesh) -> int:
-    if NEW_API:
-        return mesh.geometry.cmap.degree
-    return mesh.geometry.cmap.degree
+    return coordinate_element(mesh).degree
 
 
 def function(V):
@@ -219,9 +236,10 @@ def petsc_vector(u):
 
 
 def create_vector(L):
-    """A ghosted PETSc vector for a compiled linear form."""
+    """A ghosted PETSc vector for a compiled linear form (0.10+ builds it from the form's
+    test space)."""
     import dolfinx.fem.petsc
-    return dolfinx.fem.petsc.create_vector(L)
+    return dolfinx.fem.petsc.create_vector(L.function_spaces[0] if API_0_10 else L)
 
 
 def create_matrix(a):
@@ -351,9 +369,10 @@ def scalar_constant(mesh: dolfinx.mesh.Mesh, value: float):
 def geometry_dofmap(mesh: dolfinx.mesh.Mesh) -> np.ndarray:
     """Geometry node indices of every local cell, (num_cells, nodes per cell).
 
-    0.9: ``mesh.geometry.dofmap`` is that 2D array; 0.5: an AdjacencyList.
+    0.9: ``mesh.geometry.dofmap`` is that 2D array (0.11: ``dofmaps[0]``); 0.5: an
+    AdjacencyList.
     """
-    dofmap = mesh.geometry.dofmap
+    dofmap = mesh.geometry.dofmaps[0] if API_0_11 else mesh.geometry.dofmap
     if NEW_API:
         return np.asarray(dofmap)
     n = len(dofmap.offsets) - 1
