@@ -1,20 +1,17 @@
-"""The dolfinx calls whose signature differs between dolfinx 0.5 and 0.9.
+"""The dolfinx calls whose signature differs between dolfinx 0.5, 0.9 and 0.11.
 
-Every dolfinx / ufl / basix call whose spelling differs between the two
-supported releases lives here, and nothing else in the package (or its tests)
-branches on versions:
+Every dolfinx / ufl / basix call whose spelling differs between the supported releases
+lives here, and nothing else in the package (or its tests) branches on versions:
 
-* Debian 12 (bookworm): dolfinx 0.5.2, Python 3.11, numpy 1.24, PETSc 3.18,
-  Open MPI 4.1;
-* Debian 13 (trixie): dolfinx 0.9.0, Python 3.13, numpy 2.2, PETSc 3.22,
-  Open MPI 5.0.
+* Debian 12 (bookworm): dolfinx 0.5.2, Python 3.11, numpy 1.24, PETSc 3.18, Open MPI 4.1;
+* Debian 13 (trixie): dolfinx 0.9.0, Python 3.13, numpy 2.2, PETSc 3.22, Open MPI 5.0;
+* Debian sid: dolfinx 0.11.0, Python 3.14, numpy 2.4, PETSc 3.25, Open MPI 5.0.
 
-Both branches are tested: the 0.5 one natively, the 0.9 one by
-``.ci/debian13.sh`` (the whole suite, serially and on 2 ranks, in a trixie
-root filesystem), which also checks that a verification scene gives the same
-reactions on both releases within 1e-6 relative.  The 0.9 branch mirrors what
-0.9's own ``gmshio.model_to_mesh`` does.  The MPI launcher helpers at the end
-switch on the Open MPI version (``mpirun -q`` is gone in Open MPI 5).
+Every branch is tested: the 0.5 one natively, the others by ``.ci/chroot.sh trixie|sid``
+(the suite in a root filesystem of that suite), which also checks that a verification
+scene gives the same reactions as on 0.5 within 1e-6 relative.  The 0.9+ branches mirror
+what dolfinx's own ``model_to_mesh`` does.  The MPI launcher helpers at the end switch on
+the Open MPI version (``mpirun -q`` is gone in Open MPI 5).
 """
 from __future__ import annotations
 

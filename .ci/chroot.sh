@@ -1,48 +1,53 @@
 #!/usr/bin/env bash
-# Run dolfinx_friction's test suite on Debian 13 (trixie: dolfinx 0.9, Python 3.13,
-# numpy 2, PETSc 3.22) from a Debian 12 host, inside a trixie root filesystem.
+# Run dolfinx_friction's test suite on a newer Debian from a Debian 12 host, inside a
+# root filesystem of that suite:
+#   trixie  Debian 13: dolfinx 0.9, Python 3.13, numpy 2, PETSc 3.22 (no calculix-ccx);
+#   sid     Debian unstable: dolfinx 0.11, Python 3.14, numpy 2.4, PETSc 3.25, ccx 2.23
+#           (its Release file may be past its validity date: apt is told to accept it).
 #
-#   bash .ci/debian13.sh                  # build-or-reuse the rootfs, run everything
-#   bash .ci/debian13.sh --build-only     # only make sure the cached rootfs exists
-#   bash .ci/debian13.sh --rebuild        # rebuild the cached rootfs first
-#   bash .ci/debian13.sh -- -k gmsh -x    # extra arguments after -- go to pytest
+#   bash .ci/chroot.sh SUITE                  # build-or-reuse the rootfs, run everything
+#   bash .ci/chroot.sh SUITE --build-only     # only make sure the cached rootfs exists
+#   bash .ci/chroot.sh SUITE --rebuild        # rebuild the cached rootfs first
+#   bash .ci/chroot.sh SUITE -- -k gmsh -x    # extra arguments after -- go to pytest
 #
 # Stages (each prints how long it took):
 #   1. rootfs: a tarball cached OUTSIDE the repository
 #      ($DOLFINX_FRICTION_ROOTFS_CACHE, default /var/cache/dolfinx_friction/
-#      trixie-rootfs.tar), built with mmdebstrap (installed with apt-get when
-#      missing) from the Debian mirror this machine's apt sources use (it stops
-#      with one line when they name none: no fallback address); rebuilt when the
-#      package list below changes (a stamp file next to it).
-#   2. unpack it into a temporary directory, copy the working tree in (no .git,
-#      .venv, caches or results), bind-mount /proc, /sys, /dev, /dev/pts, /dev/shm;
+#      SUITE-rootfs.tar), built with mmdebstrap (installed with apt-get when missing)
+#      from the Debian mirror this machine's apt sources use (it stops with one line when
+#      they name none: no fallback address); rebuilt when the package list below changes
+#      (a stamp file next to it).
+#   2. unpack it into a temporary directory of its own, copy the working tree in (no
+#      .git, .venv, caches or results), bind-mount /proc, /sys, /dev, /dev/pts, /dev/shm;
 #      a trap unmounts them and removes the directory on any exit.
-#   3. pytest serially, then under `mpirun -n 2`, as root inside the chroot,
-#      with PYTHONPATH at the copied repo (Debian's packages, no venv).
+#   3. pytest serially (the whole suite), then under `mpirun -n 2` (the suite's
+#      MPI_TESTS of the suite, below), as root inside the chroot, with PYTHONPATH at
+#      the copied repo (Debian's packages, no venv).
 #   4. the release check: .ci/release_check/scene.toml (a block pressed onto a
 #      foundation and slid with Coulomb friction; mesh from make_mesh.py, written
 #      once on the host) run with `python3 -m dolfinx_friction run` on the host
-#      (Debian 12, dolfinx 0.5) and in trixie, serially and on 2 ranks: every
-#      reaction component of each trixie history.csv must agree with the host's
+#      (Debian 12, dolfinx 0.5) and in the chroot, serially and on 2 ranks: every
+#      reaction component of each chroot history.csv must agree with the host's
 #      within 1e-6 relative (.ci/compare_histories.py).  The scene is also
-#      rendered once in trixie under xvfb-run (.ci/release_check/render.py): the
+#      rendered once in the chroot under xvfb-run (.ci/release_check/render.py): the
 #      pyvista path is in no test.
-#
-# Timings on the 2-core machine: cold rootfs build about 10 min (2.8 GB), unpack
-# 35-50 s, trixie serial pytest 2.5 min, MPI pytest 3.5-4.5 min, release check
-# 35-50 s.
 #
 # Exits non-zero if any stage fails, or if a pytest run collects no tests
 # (pytest exit 5).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+SUITE="${1:-}"
+case "$SUITE" in
+    trixie|sid) shift ;;
+    *) printf 'chroot.sh: ERROR: the first argument is the suite: trixie or sid (got "%s")\n' \
+           "$SUITE" >&2; exit 2 ;;
+esac
 CACHE_DIR="${DOLFINX_FRICTION_ROOTFS_CACHE:-/var/cache/dolfinx_friction}"
-TARBALL="$CACHE_DIR/trixie-rootfs.tar"
+TARBALL="$CACHE_DIR/$SUITE-rootfs.tar"
 STAMP="$TARBALL.stamp"
 # dolfinx's JIT cache (compiled forms) kept between runs; emptied with each new rootfs
-JIT_CACHE="$CACHE_DIR/trixie-xdg-cache"
-SUITE=trixie
+JIT_CACHE="$CACHE_DIR/$SUITE-xdg-cache"
 HOST_PY="${HOST_PYTHON:-/usr/bin/python3}"
 # Relative tolerance on the reactions of the release-check scene (stage 4).
 COMPARE_RTOL="${COMPARE_RTOL:-1e-6}"
@@ -50,15 +55,28 @@ COMPARE_RTOL="${COMPARE_RTOL:-1e-6}"
 PACKAGES=(
     python3-dolfinx python3-gmsh python3-scipy python3-pytest python3-hypothesis
     python3-pyvista python3-matplotlib python3-numba python3-tqdm libegl1 openmpi-bin
-    # Debian 13's VTK renders through X only: pictures need a virtual X server
+    # VTK renders through X only in these suites: pictures need a virtual X server
     xvfb xauth
-    # (calculix-ccx is not in trixie: the CalculiX peer tests skip there)
     # dolfinx JIT-compiles forms (ffcx -> cffi -> C compiler + Python headers)
     build-essential python3-dev
 )
+APT_OPTIONS=('APT::Install-Recommends "false"')
+# The tests run on 2 ranks in the chroot: those whose code has a parallel path of its own
+# (the building block and solvers, the verification scenes, the CLI under mpirun, the
+# outputs).  The whole suite runs on 2 ranks on the host; here the MPI run checks what
+# differs with the release (dolfinx's parallel layouts, Open MPI 5).
+MPI_TESTS=(tests/fem tests/verification tests/cli/test_outputs.py tests/cli/test_ranks.py)
+case "$SUITE" in
+    trixie)
+        DESCRIPTION="Debian 13 (dolfinx 0.9)" ;;  # trixie has no calculix-ccx: the peer tests skip
+    sid)
+        DESCRIPTION="Debian sid (dolfinx 0.11)"
+        PACKAGES+=(calculix-ccx)  # 2.23: the CalculiX peer tests run against it
+        APT_OPTIONS+=('Acquire::Check-Valid-Until "false"') ;;
+esac
 
-say() { printf 'debian13.sh: %s\n' "$*"; }
-die() { printf 'debian13.sh: ERROR: %s\n' "$*" >&2; exit 1; }
+say() { printf 'chroot.sh (%s): %s\n' "$SUITE" "$*"; }
+die() { printf 'chroot.sh (%s): ERROR: %s\n' "$SUITE" "$*" >&2; exit 1; }
 now() { date +%s; }
 took() { say "$1 took $(($(now) - $2)) s"; }
 
@@ -70,7 +88,7 @@ while (($#)); do
         --build-only) build_only=1 ;;
         --rebuild) rebuild=1 ;;
         --) shift; PYTEST_ARGS=("$@"); break ;;
-        -h|--help) sed -n '2,36p' "${BASH_SOURCE[0]}"; exit 0 ;;
+        -h|--help) sed -n '2,37p' "${BASH_SOURCE[0]}"; exit 0 ;;
         *) die "unknown argument: $1 (pytest arguments go after --)" ;;
     esac
     shift
@@ -95,29 +113,34 @@ debian_mirror() {
                 sub(/\/$/, "", $4); print $4; found = 1 }'
 }
 
-want_stamp="$(printf '%s\n' "$SUITE" "${PACKAGES[@]}" | sha256sum | cut -d' ' -f1)"
+want_stamp="$(printf '%s\n' "$SUITE" "${PACKAGES[@]}" "${APT_OPTIONS[@]}" | sha256sum | cut -d' ' -f1)"
 
 build_rootfs() {
     local start mirror tmp
     start="$(now)"
+    mkdir -p "$CACHE_DIR"
+    # (two suites may be built at once: one of them installs mmdebstrap)
     if ! command -v mmdebstrap >/dev/null 2>&1; then
         say "installing mmdebstrap"
-        DEBIAN_FRONTEND=noninteractive apt-get install -y -q mmdebstrap >/dev/null \
-            || { apt-get update -q >/dev/null && DEBIAN_FRONTEND=noninteractive \
-                 apt-get install -y -q mmdebstrap >/dev/null; } \
-            || die "cannot install mmdebstrap"
+        (
+            flock 9
+            command -v mmdebstrap >/dev/null 2>&1 \
+                || DEBIAN_FRONTEND=noninteractive apt-get install -y -q mmdebstrap >/dev/null \
+                || { apt-get update -q >/dev/null && DEBIAN_FRONTEND=noninteractive \
+                     apt-get install -y -q mmdebstrap >/dev/null; }
+        ) 9>"$CACHE_DIR/.install.lock" || die "cannot install mmdebstrap"
     fi
     mirror="$(debian_mirror)"
     [[ -n "$mirror" ]] || die "no Debian mirror in this machine's apt sources (no 'deb' source" \
         "of suite $(. /etc/os-release 2>/dev/null; echo "${VERSION_CODENAME:-?}") with component" \
         "main in /etc/apt/sources.list or /etc/apt/sources.list.d/): add one, or build elsewhere"
     say "building the $SUITE rootfs from $mirror into $TARBALL (takes a few minutes)"
-    mkdir -p "$CACHE_DIR"
     tmp="$TARBALL.partial.$$"
     rm -f "$tmp"
-    local log="$CACHE_DIR/mmdebstrap.log"
-    if ! mmdebstrap --mode=root --variant=apt --format=tar \
-            --aptopt='APT::Install-Recommends "false"' \
+    local log="$CACHE_DIR/$SUITE-mmdebstrap.log"
+    local aptopts=() opt
+    for opt in "${APT_OPTIONS[@]}"; do aptopts+=("--aptopt=$opt"); done
+    if ! mmdebstrap --mode=root --variant=apt --format=tar "${aptopts[@]}" \
             --include="$(IFS=,; echo "${PACKAGES[*]}")" \
             "$SUITE" "$tmp" "deb $mirror $SUITE main" >"$log" 2>&1; then
         tail -n 40 "$log" >&2
@@ -141,7 +164,7 @@ fi
 ((build_only)) && exit 0
 
 # ------------------------------------------------------------------ stage 2: chroot
-WORK="$(mktemp -d "${TMPDIR:-/tmp}/dolfinx_friction-trixie.XXXXXX")"
+WORK="$(mktemp -d "${TMPDIR:-/tmp}/dolfinx_friction-$SUITE.XXXXXX")"
 R="$WORK/rootfs"
 MOUNTS=()
 
@@ -149,13 +172,13 @@ cleanup() {
     local rc=$? i
     for ((i = ${#MOUNTS[@]} - 1; i >= 0; i--)); do
         umount "${MOUNTS[i]}" 2>/dev/null || umount -l "${MOUNTS[i]}" 2>/dev/null \
-            || printf 'debian13.sh: WARNING: could not unmount %s\n' "${MOUNTS[i]}" >&2
+            || printf 'chroot.sh: WARNING: could not unmount %s\n' "${MOUNTS[i]}" >&2
     done
     # Only remove the tree when nothing is mounted below it any more.
     if ! grep -q " $WORK/" /proc/self/mounts; then
         rm -rf --one-file-system "$WORK"
     else
-        printf 'debian13.sh: WARNING: mounts left below %s, not removed\n' "$WORK" >&2
+        printf 'chroot.sh: WARNING: mounts left below %s, not removed\n' "$WORK" >&2
     fi
     exit "$rc"
 }
@@ -200,17 +223,17 @@ in_chroot() {
 
 in_chroot python3 -c '
 import sys, numpy, dolfinx, basix, ufl, petsc4py.PETSc as P, mpi4py, scipy, gmsh
-print("debian13.sh: trixie: Python %s, dolfinx %s, basix %s, ufl %s, PETSc %s, numpy %s, scipy %s, gmsh %s"
+print("chroot.sh: " + sys.argv[1] + ": Python %s, dolfinx %s, basix %s, ufl %s, PETSc %s, numpy %s, scipy %s, gmsh %s"
       % (sys.version.split()[0], dolfinx.__version__, basix.__version__, ufl.__version__,
          ".".join(map(str, P.Sys.getVersion())), numpy.__version__, scipy.__version__,
          gmsh.__version__))
-'
+' "$SUITE"
 
 describe() {  # describe NAME RC
     case "$2" in
         0) say "$1 passed" ;;
-        5) printf 'debian13.sh: %s FAILED: no tests were collected (pytest exit 5)\n' "$1" >&2 ;;
-        *) printf 'debian13.sh: %s FAILED (exit code %s)\n' "$1" "$2" >&2 ;;
+        5) printf 'chroot.sh: %s FAILED: no tests were collected (pytest exit 5)\n' "$1" >&2 ;;
+        *) printf 'chroot.sh: %s FAILED (exit code %s)\n' "$1" "$2" >&2 ;;
     esac
 }
 
@@ -221,14 +244,16 @@ for arg in "${PYTEST_ARGS[@]}"; do
 done
 
 start="$(now)"
-say "trixie serial run: pytest -q -p no:cacheprovider ${targets[*]} ${PYTEST_ARGS[*]}"
+say "$SUITE serial run: pytest -q -p no:cacheprovider ${targets[*]} ${PYTEST_ARGS[*]}"
 serial_rc=0
 in_chroot python3 -m pytest -q -p no:cacheprovider "${targets[@]}" "${PYTEST_ARGS[@]}" || serial_rc=$?
-describe "trixie serial run" "$serial_rc"
-took "trixie serial run" "$start"
+describe "$SUITE serial run" "$serial_rc"
+took "$SUITE serial run" "$start"
 
 start="$(now)"
-say "trixie MPI run: mpirun -n 2 pytest -q -p no:cacheprovider ${targets[*]} ${PYTEST_ARGS[*]}"
+mpi_targets=("${MPI_TESTS[@]}")
+((${#targets[@]})) || mpi_targets=()
+say "$SUITE MPI run: mpirun -n 2 pytest -q -p no:cacheprovider ${mpi_targets[*]} ${PYTEST_ARGS[*]}"
 mpi_rc=0
 # Only rank 0 prints; the other rank's output is shown when the run fails.
 in_chroot mpirun -n 2 --oversubscribe --bind-to none \
@@ -239,7 +264,7 @@ in_chroot mpirun -n 2 --oversubscribe --bind-to none \
             exec "$@" >"/work/tmp/pytest.rank${OMPI_COMM_WORLD_RANK}.log" 2>&1
         fi
     ' rank-wrapper python3 -m pytest -q -p no:cacheprovider --color=no \
-    "${targets[@]}" "${PYTEST_ARGS[@]}" || mpi_rc=$?
+    "${mpi_targets[@]}" "${PYTEST_ARGS[@]}" || mpi_rc=$?
 if ((mpi_rc != 0)); then
     for f in "$R"/work/tmp/pytest.rank*.log; do
         [[ -e "$f" ]] || continue
@@ -247,17 +272,17 @@ if ((mpi_rc != 0)); then
         tail -n 200 "$f" >&2
     done
 fi
-describe "trixie MPI run (2 ranks)" "$mpi_rc"
-took "trixie MPI run" "$start"
+describe "$SUITE MPI run (2 ranks)" "$mpi_rc"
+took "$SUITE MPI run" "$start"
 
 # ------------------------------------------------------------------ stage 4: releases agree
 # .ci/release_check/scene.toml on the very same mesh (written once, on the host):
-# trixie serial and trixie `mpirun -n 2` against the host (Debian 12) serial run.
+# the suite serially and on `mpirun -n 2` against the host (Debian 12) serial run.
 # The host runs the snapshot of the working tree copied into the chroot, so both
 # releases run the same code even while the working tree changes.
 compare_rc=0
 start="$(now)"
-say "releases: .ci/release_check/scene.toml on Debian 13 (serial, 2 ranks) and on the host"
+say "releases: .ci/release_check/scene.toml on $DESCRIPTION (serial, 2 ranks) and on the host"
 SNAP="$R/work/repo"
 RC_HOST="$WORK/release_check"
 mkdir -p "$RC_HOST" "$R/work/release_check"
@@ -278,11 +303,11 @@ if ((compare_rc == 0)); then
 fi
 if ((compare_rc == 0)); then
     "$HOST_PY" "$SNAP/.ci/compare_histories.py" --rtol "$COMPARE_RTOL" \
-        --label "Debian 12 (dolfinx 0.5)" --label "Debian 13 (dolfinx 0.9)" \
+        --label "Debian 12 (dolfinx 0.5)" --label "$DESCRIPTION" \
         "$RC_HOST/host/history.csv" "$R/work/release_check/serial/history.csv" \
         || compare_rc=$?
     "$HOST_PY" "$SNAP/.ci/compare_histories.py" --rtol "$COMPARE_RTOL" --quiet \
-        --label "Debian 12 (dolfinx 0.5)" --label "Debian 13 (dolfinx 0.9, 2 ranks)" \
+        --label "Debian 12 (dolfinx 0.5)" --label "$DESCRIPTION, 2 ranks" \
         "$RC_HOST/host/history.csv" "$R/work/release_check/mpi2/history.csv" \
         || compare_rc=$?
 fi
@@ -292,4 +317,4 @@ took "release comparison" "$start"
 if ((serial_rc != 0 || mpi_rc != 0 || compare_rc != 0)); then
     exit 1
 fi
-say "all Debian 13 runs passed"
+say "all $DESCRIPTION runs passed"
