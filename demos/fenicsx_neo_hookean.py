@@ -25,11 +25,11 @@ import gmsh
 import numpy as np
 import ufl
 from dolfinx import fem
-from dolfinx.io import XDMFFile, gmshio
+from dolfinx.io import XDMFFile
 from mpi4py import MPI
 
 from dolfinx_friction import BlockProblem, NodeToSurface, Surface, rigid_plane, solve_steps
-from dolfinx_friction._compat import vector_space
+from dolfinx_friction._compat import model_to_mesh, vector_space  # the same on dolfinx 0.5-0.11
 
 parser = argparse.ArgumentParser()
 parser.add_argument("--cells", type=int, default=20, help="cells along the block's width")
@@ -55,7 +55,7 @@ if comm.rank == 0:
     gmsh.model.mesh.setRecombine(2, 1)
     gmsh.model.addPhysicalGroup(2, [1], 1)
     gmsh.model.mesh.generate(2)
-mesh, _, facets = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+mesh, _, facets = model_to_mesh(gmsh.model, comm, 0, gdim=2)
 gmsh.finalize()
 
 # -- the user's own physics: compressible Neo-Hookean (CalculiX's NEO HOOKE), plane strain

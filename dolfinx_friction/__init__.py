@@ -43,7 +43,7 @@ _PUBLIC = {
     "NO_ELEMENT": "fem.node_to_surface", "BlockProblem": "fem.block_problem",
     "Newton": "nls.newton", "NewtonTrace": "nls.newton", "snes_solve": "nls.newton",
     "solve_steps": "nls.stepping", "IncrementRecord": "nls.stepping",
-    "ConvergenceError": "errors",
+    "ConvergenceError": "errors", "add_contact": "fem.snes", "SNESContact": "fem.snes",
     "Linear": "contact.laws", "Exponential": "contact.laws", "Tabular": "contact.laws",
 }
 __all__ = sorted(_PUBLIC)

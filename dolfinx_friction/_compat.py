@@ -76,6 +76,15 @@ def ufl_mesh(gmsh_cell: int, gdim: int):
                                                         variant="equispaced")))
 
 
+def model_to_mesh(model, comm, rank: int, gdim: int) -> tuple:
+    """``(mesh, cell_tags, facet_tags)`` of the gmsh model on ``rank`` (dolfinx's
+    ``model_to_mesh``: a tuple up to 0.9, a named tuple of six fields from 0.10)."""
+    data = _gmshio().model_to_mesh(model, comm, rank, gdim=gdim)
+    if API_0_10:
+        return data.mesh, data.cell_tags, data.facet_tags
+    return data
+
+
 def cell_perm_gmsh(cell_type: dolfinx.mesh.CellType, num_nodes: int) -> np.ndarray:
     """Permutation ``p`` with ``nodes_dolfinx[i] = nodes_gmsh[p[i]]`` (``cpp.io.perm_gmsh``)."""
     if NEW_API:  # gmshio.cell_perm_array; the module moved to dolfinx.io.gmsh in 0.10
@@ -240,7 +249,8 @@ def create_vector(L):
 
 
 def create_matrix(a):
-    """An empty PETSc matrix with the sparsity of a compiled bilinear form."""
+    """An empty PETSc matrix with the sparsity of a compiled bilinear form, or (0.10+) of a
+    2-D list of them in dolfinx's block numbering."""
     import dolfinx.fem.petsc
     return dolfinx.fem.petsc.create_matrix(a)
 
@@ -251,6 +261,48 @@ def assemble_matrix_into(A, a, bcs=()) -> None:
     import dolfinx.fem.petsc
     dolfinx.fem.petsc.assemble_matrix(A, a, list(bcs))
     A.assemble()
+
+
+def snes_problem(problem):
+    """The parts of a dolfinx 0.10+ ``fem.petsc.NonlinearProblem`` the contact joins:
+    ``snes`` (its SNES), ``J`` (its compiled Jacobian form, or 2-D list of them) and
+    ``spaces`` (of its unknowns, in block order).  Raises ContactSetupError for an older
+    dolfinx, another object, a nest matrix or a preconditioner form."""
+    from types import SimpleNamespace
+    from dolfinx_friction.errors import ContactSetupError
+    if not API_0_10:
+        raise ContactSetupError(f"add_contact needs dolfinx >= 0.10's SNES NonlinearProblem "
+                                f"(this is dolfinx {dolfinx.__version__}): use BlockProblem "
+                                f"with snes_solve or solve_steps")
+    from dolfinx.fem.petsc import NonlinearProblem
+    if not isinstance(problem, NonlinearProblem):
+        raise ContactSetupError(f"add_contact: {type(problem).__name__} is not a "
+                                f"dolfinx.fem.petsc.NonlinearProblem")
+    if problem.A.getType() == "nest":
+        raise ContactSetupError("add_contact: a nest matrix cannot hold the couplings between "
+                                "bodies: make the NonlinearProblem with kind=\"mpi\"")
+    if problem.P_mat is not None:
+        raise ContactSetupError("add_contact: a preconditioner form P is not supported (the "
+                                "contact tangent would miss it)")
+    u = problem.u
+    unknowns = list(u) if isinstance(u, (list, tuple)) else [u]
+    return SimpleNamespace(snes=problem.solver, J=problem.J,
+                           spaces=[w.function_space for w in unknowns])
+
+
+def assign_to_vector(u, x) -> None:
+    """Copy the Function(s) ``u`` into the (block) vector ``x`` (dolfinx 0.10+)."""
+    import dolfinx.fem.petsc
+    dolfinx.fem.petsc.assign(u, x)
+
+
+def assign_from_vector(x, u) -> None:
+    """Copy the (block) vector ``x`` into the Function(s) ``u``, ghosts included
+    (dolfinx 0.10+)."""
+    import dolfinx.fem.petsc
+    dolfinx.fem.petsc.assign(x, u)
+    for f in (u if isinstance(u, (list, tuple)) else [u]):
+        f.x.scatter_forward()
 
 
 def assemble_vector_into(b, L) -> None:

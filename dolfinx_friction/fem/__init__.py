@@ -17,7 +17,7 @@ _PUBLIC = {
     "CooPattern": "pattern", "DofLayout": "numbering", "SlaveNodes": "surfaces",
     "MasterFaces": "surfaces", "ContactInteraction": "pairing", "lame": "materials",
     "bulk_modulus": "materials", "out_of_plane": "materials", "nodal_fields": "contact_fields",
-    "slave_rows": "contact_fields",
+    "slave_rows": "contact_fields", "add_contact": "snes", "SNESContact": "snes",
 }
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_names(__name__, _PUBLIC)

@@ -764,9 +764,10 @@ class _Parameters:
 
 
 def create_matrix(a, contacts: Sequence[NodeToSurface] = ()) -> PETSc.Mat:
-    """A PETSc matrix for the compiled bilinear form ``a`` (one space) whose sparsity also
-    holds the current couplings of ``contacts``: dolfinx assembles ``a`` into it as into
-    its own matrix, and the contacts add their tangents without new non-zeros.
+    """A PETSc matrix for the compiled bilinear form ``a`` (one space; on dolfinx 0.10+ also
+    a 2-D list of them, in dolfinx's block numbering) whose sparsity also holds the current
+    couplings of ``contacts``: dolfinx assembles ``a`` into it as into its own matrix, and
+    the contacts add their tangents without new non-zeros.
     Collective; call after :meth:`NodeToSurface.begin`."""
     from dolfinx_friction.fem.pattern import CooPattern
     base = compat.create_matrix(a)

@@ -1,0 +1,169 @@
+"""The contact added to a dolfinx ``fem.petsc.NonlinearProblem`` (dolfinx 0.10+), solved by
+its own SNES.
+
+A user who writes their bodies the dolfinx 0.10/0.11 way::
+
+    problem = NonlinearProblem(F, u, bcs=bcs, petsc_options_prefix="block_",
+                               petsc_options={"snes_linesearch_type": "none", ...})
+    contact = add_contact(problem, [pair], bcs=bcs, history=[plasticity])
+    for t in times:
+        ...set the loads at t...
+        reason = contact.solve()       # begin, problem.solve(), commit (or roll back)
+
+gets the contact's forces and exact tangent in the SNES callbacks (after dolfinx's own
+assembly, which stays as it is), a matrix whose sparsity also holds the contact
+couplings (made again after every search), the contact search per increment, and the
+friction history committed with the converged increment or rolled back with a failed
+one, together with the user's own history (``history``: objects with ``commit()`` and
+``rollback()``, e.g. the quadrature-point state of a plasticity model).
+
+``F`` may be one form (one body and rigid obstacles) or a list of forms (several bodies,
+``kind="mpi"``: the contact's numbering is dolfinx's block numbering, see
+:class:`~dolfinx_friction.fem.node_to_surface.NodeToSurface`'s ``spaces``).
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Protocol
+
+from petsc4py import PETSc
+
+from dolfinx_friction import _compat as compat
+from dolfinx_friction.errors import ContactSetupError
+from dolfinx_friction.fem.node_to_surface import NodeToSurface, create_matrix
+
+__all__ = ["History", "SNESContact", "add_contact"]
+
+
+class History(Protocol):
+    """A piece of history (state at the last converged increment) a cutback must undo."""
+
+    def commit(self) -> None: ...
+
+    def rollback(self) -> None: ...
+
+
+class SNESContact:
+    """Contact pairs joined to a dolfinx 0.10+ ``NonlinearProblem`` (made by
+    :func:`add_contact`)."""
+
+    def __init__(self, problem, contacts: Sequence[NodeToSurface], bcs: Sequence = (),
+                 history: Sequence[History] = ()):
+        parts = compat.snes_problem(problem)
+        self.problem, self.contacts = problem, list(contacts)
+        self.bcs, self.history = list(bcs), list(history)
+        self.snes: PETSc.SNES = parts.snes
+        self._forms = parts.J
+        spaces = parts.spaces
+        for c in self.contacts:
+            if len(c.spaces) != len(spaces) or any(a is not b for a, b in zip(c.spaces, spaces)):
+                raise ContactSetupError(
+                    f"{c.name}: its spaces are not the problem's ({len(spaces)} unknown(s)): "
+                    f"give NodeToSurface(..., spaces=[u.function_space for u in the problem's u])")
+        for h in self.history:
+            if not (callable(getattr(h, "commit", None))
+                    and callable(getattr(h, "rollback", None))):
+                raise ContactSetupError(f"history: {h!r} has no commit() and rollback()")
+        b, (residual, r_args, r_kwargs) = self.snes.getFunction()
+        _A, _P, (jacobian, j_args, j_kwargs) = self.snes.getJacobian()
+        if isinstance(getattr(residual, "__self__", None), SNESContact):
+            raise ContactSetupError("add_contact: this problem already has contacts added")
+        self._user = ((residual, r_args, r_kwargs or {}), (jacobian, j_args, j_kwargs or {}))
+        self._b = b
+        self.snes.setFunction(self._residual, b)
+        self.A: PETSc.Mat | None = None
+        self._started = False
+
+    # ------------------------------------------------------------- increments
+    def begin(self) -> None:
+        """Start an increment at the problem's current solution (collective): search, and
+        a matrix whose sparsity holds the bodies' forms and the new contact couplings."""
+        x = self.problem.x
+        compat.assign_to_vector(self.problem.u, x)
+        for c in self.contacts:
+            c.begin(x)
+            c.update(x, search=False)  # paired at the first iterate
+        self._new_matrix()
+        self._started = True
+
+    def solve(self) -> int:
+        """One increment: :meth:`begin`, the problem's ``solve()`` (its SNES), then
+        :meth:`commit` if SNES converged, else :meth:`rollback` (the solution Functions
+        back at the increment's start).  Returns SNES's converged reason (> 0 converged)."""
+        self.begin()
+        start = self.problem.x.copy()
+        self.problem.solve()
+        reason = self.snes.getConvergedReason()
+        if reason > 0:
+            self.commit()
+        else:
+            start.copy(self.problem.x)
+            compat.assign_from_vector(self.problem.x, self.problem.u)
+            self.rollback()
+        start.destroy()
+        return reason
+
+    def commit(self) -> None:
+        """Accept the increment: the contacts' and ``history``'s state become the start of
+        the next one."""
+        for c in self.contacts:
+            c.commit()
+        for h in self.history:
+            h.commit()
+        self._started = False
+
+    def rollback(self) -> None:
+        """Undo the increment's history changes (contacts and ``history``) before a retry."""
+        for c in self.contacts:
+            c.rollback()
+        for h in self.history:
+            h.rollback()
+        self._started = False
+
+    # ------------------------------------------------------------- SNES callbacks
+    # SNES evaluates the residual at line-search trials as well as at its iterates, and
+    # the Jacobian only at its iterates: so the contacts are paired (slave nodes to master
+    # faces) where the Jacobian is evaluated, at the start of each Newton step, and
+    # frozen in every residual evaluation; where pairing changed the contacts, the
+    # residual SNES holds for that iterate is evaluated again before its step is solved.
+    def _residual(self, snes: PETSc.SNES, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        (residual, args, kwargs), _ = self._user
+        residual(snes, x, b, *args, **kwargs)  # dolfinx's: bodies, lifting, Dirichlet rows
+        self._require_started()
+        for c in self.contacts:
+            c.update(x, pairing=False, search=False)
+        for c in self.contacts:
+            c.add_residual(b, self.bcs)
+
+    def _jacobian(self, snes: PETSc.SNES, x: PETSc.Vec, A: PETSc.Mat, P: PETSc.Mat) -> None:
+        before = [c.evaluations for c in self.contacts]
+        for c in self.contacts:
+            c.update(x, search=False)
+        if [c.evaluations for c in self.contacts] != before:
+            self._residual(snes, x, snes.getFunction()[0])
+        _, (jacobian, args, kwargs) = self._user
+        jacobian(snes, x, A, P, *args, **kwargs)  # dolfinx's: bodies, Dirichlet rows
+        for c in self.contacts:
+            c.add_jacobian(A, self.bcs)
+
+    def _new_matrix(self) -> None:
+        if self.A is not None:
+            self.A.destroy()
+        self.A = create_matrix(self._forms, self.contacts)
+        self.snes.setJacobian(self._jacobian, self.A, self.A)
+
+    def _require_started(self) -> None:
+        if not self._started:
+            raise ContactSetupError("the contacts have not begun this increment: call "
+                                    "SNESContact.solve() (or begin() before problem.solve())")
+
+
+def add_contact(problem, contacts: Sequence[NodeToSurface], bcs: Sequence = (),
+                history: Sequence[History] = ()) -> SNESContact:
+    """Add ``contacts`` to a dolfinx ``fem.petsc.NonlinearProblem`` (dolfinx 0.10+): their
+    forces and tangent join the problem's SNES callbacks; ``bcs``: the problem's Dirichlet
+    conditions (the contact leaves their rows and columns as dolfinx makes them);
+    ``history``: the user's own state to commit and roll back with the contacts'.
+    Raises :class:`~dolfinx_friction.ContactSetupError` (one line) for a problem of an
+    older dolfinx, a nest matrix, contacts on other spaces, or a problem with contacts."""
+    return SNESContact(problem, contacts, bcs, history)

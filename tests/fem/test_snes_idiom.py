@@ -1,0 +1,148 @@
+"""The contact in dolfinx 0.10+'s SNES idiom (``add_contact`` on a user's
+``fem.petsc.NonlinearProblem``): the same answer as the package's own block problem, the
+user's history committed and rolled back with the contact's, and one clear line for bad
+input.  Serial and under ``mpirun -n 2``; skipped below dolfinx 0.10 (where the package
+says so in one line, tested too)."""
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+import ufl
+from dolfinx import fem, mesh
+from dolfinx.fem.petsc import NonlinearProblem
+from mpi4py import MPI
+
+from dolfinx_friction import (BlockProblem, ContactSetupError, NodeToSurface, Surface,
+                              add_contact, rigid_plane, snes_solve)
+
+SNES_PROBLEM = "petsc_options_prefix" in inspect.signature(NonlinearProblem).parameters
+needs_snes = pytest.mark.skipif(not SNES_PROBLEM,
+                                reason="dolfinx < 0.10: no SNES NonlinearProblem")
+BOTTOM, TOP = 1, 2
+E, NU = 1000.0, 0.3
+OPTIONS = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "snes_rtol": 1e-10,
+           "snes_atol": 1e-9, "snes_max_it": 50, "ksp_type": "preonly", "pc_type": "lu",
+           "pc_factor_mat_solver_type": "mumps"}
+LOADS = [(0.0, 0.02), (0.0, 0.04), (0.02, 0.04), (0.05, 0.04)]  # press, then slide
+
+
+def block():
+    """A Neo-Hookean block (1 x 0.5, 8 x 4 cells) held at its top: V, tags, u, F, bc."""
+    domain = mesh.create_rectangle(MPI.COMM_WORLD, [[0.0, 0.0], [1.0, 0.5]], [8, 4],
+                                   mesh.CellType.quadrilateral)
+    facets, values = [], []
+    for y, tag in ((0.0, BOTTOM), (0.5, TOP)):
+        found = mesh.locate_entities_boundary(domain, 1, lambda x, y=y: np.isclose(x[1], y))
+        facets.append(found)
+        values.append(np.full(len(found), tag, dtype=np.int32))
+    order = np.argsort(np.concatenate(facets))
+    tags = mesh.meshtags(domain, 1, np.concatenate(facets)[order],
+                         np.concatenate(values)[order])
+    V = fem.functionspace(domain, ("Lagrange", 1, (2,)))
+    u, v = fem.Function(V), ufl.TestFunction(V)
+    mu, kappa = E / (2 * (1 + NU)), E / (3 * (1 - 2 * NU))
+    F2 = ufl.variable(ufl.Identity(2) + ufl.grad(u))
+    F3 = ufl.as_matrix([[F2[0, 0], F2[0, 1], 0], [F2[1, 0], F2[1, 1], 0], [0, 0, 1]])
+    J = ufl.det(F3)
+    W = mu / 2 * (J ** (-2 / 3) * ufl.tr(F3.T * F3) - 3) + kappa / 2 * (J - 1) ** 2
+    F = ufl.inner(ufl.diff(W, F2), ufl.grad(v)) * ufl.dx
+    held = fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(V, 1, tags.find(TOP)), V)
+    return V, tags, u, F, held
+
+
+def pair_on(V, tags):
+    return NodeToSurface(Surface(V, tags, BOTTOM), rigid_plane([0.0, 0.0], [0.0, 1.0]), E=E,
+                         K=100 * E / 0.125, stick_slope=10 * E / 0.125, mu=0.3)
+
+
+class Counter:
+    """A user's history: counts its commits and rollbacks."""
+
+    def __init__(self):
+        self.commits = self.rollbacks = 0
+
+    def commit(self):
+        self.commits += 1
+
+    def rollback(self):
+        self.rollbacks += 1
+
+
+@needs_snes
+def test_snes_idiom_gives_the_block_problems_answer():
+    """Press and slide, increment by increment: the contact force through add_contact on
+    the user's NonlinearProblem equals the package's BlockProblem + snes_solve to 1e-8."""
+    V, tags, u, F, held = block()
+    pair = pair_on(V, tags)
+    problem = NonlinearProblem(F, u, bcs=[held], petsc_options_prefix="test_idiom_",
+                               petsc_options=OPTIONS)
+    log = Counter()
+    contact = add_contact(problem, [pair], bcs=[held], history=[log])
+    V2, tags2, u2, F2, held2 = block()
+    pair2 = pair_on(V2, tags2)
+    reference = BlockProblem([F2], [u2], [held2], [pair2])
+    for load in LOADS:
+        pair.obstacle_translation = load
+        assert contact.solve() > 0
+        pair2.obstacle_translation = load
+        pair2.begin(reference.x)
+        assert snes_solve(reference, options=OPTIONS) > 0
+        pair2.commit()
+        f, f2 = pair.force(), pair2.force()
+        np.testing.assert_allclose(f, f2, rtol=0.0, atol=1e-8 * np.abs(f2).max())
+    assert log.commits == len(LOADS) and log.rollbacks == 0
+    assert abs(f[0] / f[1]) > 0.1  # the slide reached friction
+
+
+@needs_snes
+def test_a_failed_increment_rolls_back_the_users_history():
+    """One SNES iteration allowed on a slide increment: it fails, the user's history and
+    the contact's are rolled back and the displacement is that of the increment's start;
+    the increment then succeeds with the iterations it needs."""
+    V, tags, u, F, held = block()
+    pair = pair_on(V, tags)
+    problem = NonlinearProblem(F, u, bcs=[held], petsc_options_prefix="test_rollback_",
+                               petsc_options=OPTIONS)
+    log = Counter()
+    contact = add_contact(problem, [pair], bcs=[held], history=[log])
+    pair.obstacle_translation = (0.0, 0.04)
+    assert contact.solve() > 0
+    start = u.x.array.copy()
+    pair.obstacle_translation = (0.05, 0.04)
+    contact.snes.setTolerances(max_it=1)
+    assert contact.solve() <= 0
+    assert (log.commits, log.rollbacks) == (1, 1)
+    np.testing.assert_array_equal(u.x.array, start)
+    contact.snes.setTolerances(max_it=50)
+    assert contact.solve() > 0
+    assert (log.commits, log.rollbacks) == (2, 1)
+
+
+@needs_snes
+def test_bad_input_gets_one_clear_line():
+    V, tags, u, F, held = block()
+    problem = NonlinearProblem(F, u, bcs=[held], petsc_options_prefix="test_bad_",
+                               petsc_options=OPTIONS)
+    W, wtags, *_ = block()  # another space
+    with pytest.raises(ContactSetupError, match="its spaces are not the problem's"):
+        add_contact(problem, [pair_on(W, wtags)])
+    with pytest.raises(ContactSetupError, match="has no commit"):
+        add_contact(problem, [pair_on(V, tags)], history=[object()])
+    contact = add_contact(problem, [pair_on(V, tags)], bcs=[held])
+    with pytest.raises(ContactSetupError, match="already has contacts"):
+        add_contact(problem, [pair_on(V, tags)])
+    with pytest.raises(Exception) as info:  # SNES reports it as a PETSc error, chained
+        problem.solve()
+    assert "have not begun this increment" in str(info.value.__cause__ or info.value.__context__
+                                                   or info.value)
+    del contact
+    with pytest.raises(ContactSetupError, match="is not a dolfinx.fem.petsc.NonlinearProblem"):
+        add_contact(object(), [])
+
+
+@pytest.mark.skipif(SNES_PROBLEM, reason="dolfinx >= 0.10 has the SNES NonlinearProblem")
+def test_older_dolfinx_is_told_in_one_line():
+    with pytest.raises(ContactSetupError, match=r"add_contact needs dolfinx >= 0.10"):
+        add_contact(object(), [])
