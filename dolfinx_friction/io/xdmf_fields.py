@@ -59,3 +59,20 @@ def write_fields(path: Path, field, spaces: dict, nodal: dict[str, np.ndarray], 
                                                  spaces[f"{kind}_out"], name), t)
         for f in cell_functions:
             xdmf.write_function(f, t)
+    if mesh.comm.rank == 0:
+        _xinclude_namespace(Path(path))
+
+
+#: XInclude's namespace; dolfinx 0.11 writes it with ``https``, which libxml2 (VTK's XDMF
+#: reader, ParaView) does not know: their reader then finds no mesh for the functions'
+#: grids (VTK 9.6 crashes on them)
+XINCLUDE = "http://www.w3.org/2001/XInclude"
+
+
+def _xinclude_namespace(path: Path) -> None:
+    """Write XInclude's namespace in ``path`` as the XML standard spells it."""
+    text = path.read_text()
+    fixed = text.replace(f'xmlns:xi="{XINCLUDE.replace("http:", "https:")}"',
+                         f'xmlns:xi="{XINCLUDE}"')
+    if fixed != text:
+        path.write_text(fixed)
