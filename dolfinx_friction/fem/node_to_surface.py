@@ -94,8 +94,10 @@ class ContactState:
     master, ``traction`` = ``-tangential_force / area`` the tangential traction acting on
     the slave body; ``force`` (n, gdim) [force] the whole contact force on the slave node;
     ``gap`` [length] the clearance (< 0: overclosure); ``slip`` [length] the accumulated
-    slip; ``area`` the node's representative area (deformed, at the increment's start).
-    Nodes without an element have zeros.
+    slip; ``area`` the node's representative area (deformed, at the increment's start);
+    ``reference_area`` on the undeformed faces and ``reference_pressure`` =
+    ``normal_force / reference_area`` (the nominal pressure, as small-strain closed forms
+    give it).  Nodes without an element have zeros.
     """
 
     nodes: np.ndarray  # (n,) local node (dof block) index in the slave space
@@ -110,6 +112,8 @@ class ContactState:
     slip: np.ndarray
     force: np.ndarray
     area: np.ndarray
+    reference_area: np.ndarray
+    reference_pressure: np.ndarray
 
     @property
     def has_element(self) -> np.ndarray:
@@ -664,7 +668,7 @@ class NodeToSurface:
         out = ContactState(slaves.local.copy(), slaves.X.copy(), slaves.X + self._u_slaves,
                            np.full(n, NO_ELEMENT), zero.copy(), zero.copy(), zero.copy(),
                            zeros.copy(), zeros.copy(), zero.copy(), zeros.copy(),
-                           slaves.area.copy())
+                           slaves.area.copy(), slaves.reference_area.copy(), zero.copy())
         el = inter.elements
         r = el.result
         if r is not None:
@@ -673,6 +677,7 @@ class NodeToSurface:
             out.gap[s] = r.g_N
             out.normal_force[s] = r.F_N
             out.pressure[s] = r.F_N / area
+            out.reference_pressure[s] = r.F_N / slaves.reference_area[el.slave]
             out.tangential_force[s] = r.F_T
             out.traction[s] = -r.F_T / area[:, None]
             out.force[s] = -r.f[:, -1, :]

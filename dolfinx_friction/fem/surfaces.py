@@ -97,19 +97,27 @@ class SlaveNodes:
         self.local = owned  # local node indices in the slave body
         self.nodes = field.nodes[owned]  # system node indices
         self.X = field.X[owned]  # (n, gdim) reference coordinates
+        #: (n,) the areas on the undeformed faces
+        self.reference_area = self._areas(field.X)
         self.update_areas()
 
     def update_areas(self) -> None:
         """``A_p`` on the faces as deformed by the body's current displacement."""
         f = self.field
-        x = f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)]
+        self.area = self._areas(f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)])
+        thickness = out_of_plane(f.thickness, f.gdim)
+        #: nodal spacing: the side of the representative area (its length in 2D)
+        self.spacing = self.area / thickness if f.gdim == 2 else np.sqrt(self.area)
+
+    def _areas(self, x: np.ndarray) -> np.ndarray:
+        """The owned slave nodes' representative areas (n,) with the body's nodes at ``x``
+        (local nodes, gdim) [length^2; in 2D length x thickness]."""
+        f = self.field
         thickness = out_of_plane(f.thickness, f.gdim)
         areas = thickness * face_areas(self.face, x[self._facet_nodes])
         share = np.zeros((self._facet_nodes.size, f.gdim))
         share[:, 0] = (areas[:, None] * np.asarray(self.face.area_weights)[None, :]).ravel()
-        self.area = f.to_owners(self._facet_nodes.ravel(), share)[self.local, 0]
-        #: nodal spacing: the side of the representative area (its length in 2D)
-        self.spacing = self.area / thickness if f.gdim == 2 else np.sqrt(self.area)
+        return f.to_owners(self._facet_nodes.ravel(), share)[self.local, 0]
 
 
 @dataclass

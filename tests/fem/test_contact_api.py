@@ -502,3 +502,21 @@ def test_fields_are_the_state_on_the_slave_mesh():
     away = np.setdiff1d(np.arange(owned), st.nodes)
     assert np.all(status[away] == NO_ELEMENT) and not fields["contact_pressure"].x.array[away].any()
     assert 2 in statuses(contact)  # the slide reached slip: every status code was written
+
+
+def test_reference_pressure_is_per_undeformed_area():
+    """ContactState.reference_area: the slave nodes' areas on the undeformed faces (they sum
+    to the block's width, 1, whatever the deformation); reference_pressure times it is the
+    normal force, as pressure times the deformed area is."""
+    problem, contact = on_plane()
+    press_and_slide(problem, contact, increments=(2, 1))
+    st = contact.state()
+    total = MPI.COMM_WORLD.allreduce(st.reference_area.sum())
+    assert abs(total - 1.0) < 1e-12
+    s = st.has_element
+    np.testing.assert_allclose(st.reference_pressure[s] * st.reference_area[s],
+                               st.normal_force[s], rtol=1e-12, atol=0.0)
+    np.testing.assert_allclose(st.pressure[s] * st.area[s], st.normal_force[s], rtol=1e-12,
+                               atol=0.0)
+    deformed = MPI.COMM_WORLD.allreduce(st.area.sum())
+    assert abs(deformed - 1.0) > 1e-6  # finite strain: the deformed areas differ
