@@ -278,6 +278,20 @@ class BlockProblem:
             rows += [start + compat.bc_local_dofs(bc, body.n_owned) for bc in body.bcs]
         return np.unique(np.concatenate(rows)) if rows else np.zeros(0, dtype=np.int64)
 
+    def reaction(self, bc) -> np.ndarray:
+        """The force (gdim,) [force] that the Dirichlet condition ``bc`` exerts on its body at
+        the last residual evaluation (:attr:`internal` minus the external forces, summed over
+        the condition's dofs; each dof counted once, by the rank that owns it; a condition on
+        a subspace gives its components only).  Collective."""
+        total = np.zeros(self.gdim)
+        for k, body in enumerate(self.bodies):
+            if compat.bc_on_space(bc, body.V):
+                dofs = compat.bc_local_dofs(bc, body.n_owned)
+                rows = self.block_slice(k).start + dofs
+                np.add.at(total, dofs % self.gdim, self.internal[rows] - self.f_ext[rows])
+                return self.comm.allreduce(total)
+        raise ContactSetupError("reaction: the condition is on none of the problem's bodies")
+
     # ------------------------------------------------------------ constraints
     def prescribe(self, rows: np.ndarray, values: np.ndarray) -> None:
         """Constrain owned rows (local indices of :attr:`x`) to values, besides the

@@ -520,3 +520,31 @@ def test_reference_pressure_is_per_undeformed_area():
                                atol=0.0)
     deformed = MPI.COMM_WORLD.allreduce(st.area.sum())
     assert abs(deformed - 1.0) > 1e-6  # finite strain: the deformed areas differ
+
+
+def test_reaction_of_a_dirichlet_condition_in_one_call():
+    """BlockProblem.reaction(bc): a block pressed onto a foundation and slid; the reactions
+    at the block's top and the foundation's bottom balance, and the top's is minus the
+    contact force on the block (each dof counted once: 1, 2 and 3 ranks alike)."""
+    Vb, tb = block(0.2, 0.4, 0.6, 0.3, 6, 3)
+    Vf, tf = block(0.0, 0.0, 1.0, 0.4, 9, 4, mesh.CellType.triangle)
+    ub, uf = fem.Function(Vb), fem.Function(Vf)
+    g = fem.Constant(Vb.mesh, np.zeros(2))
+    top = fem.dirichletbc(g, fem.locate_dofs_topological(Vb, 1, tb.find(TOP)), Vb)
+    bottom = fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(Vf, 1, tf.find(BOTTOM)),
+                             Vf)
+    contact = NodeToSurface(Surface(Vb, tb, BOTTOM), Surface(Vf, tf, TOP), E=E,
+                            K=100 * E / 0.1, stick_slope=10 * E / 0.1, mu=0.3)
+    problem = BlockProblem([neo_hookean(ub, ufl.TestFunction(Vb)),
+                            neo_hookean(uf, ufl.TestFunction(Vf))], [ub, uf], [top, bottom],
+                           [contact])
+    press_and_slide(problem, contact, g)
+    R_top, R_bottom = problem.reaction(top), problem.reaction(bottom)
+    scale = np.abs(R_top).max()
+    assert scale > 1.0 and abs(R_top[0]) > 0.1 * scale  # pressed and dragged
+    np.testing.assert_allclose(R_top, -R_bottom, rtol=0.0, atol=1e-8 * scale)
+    np.testing.assert_allclose(R_top, -contact.force(), rtol=0.0, atol=1e-8 * scale)
+    other = fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(Vb, 1, tb.find(TOP)),
+                            compat.vector_space(Vb.mesh, 1))
+    with pytest.raises(ContactSetupError, match="reaction: the condition is on none"):
+        problem.reaction(other)
