@@ -42,6 +42,7 @@ _PUBLIC = {
     "rigid_cylinder": "fem.node_to_surface", "create_matrix": "fem.node_to_surface",
     "NO_ELEMENT": "fem.node_to_surface", "BlockProblem": "fem.block_problem",
     "Newton": "nls.newton", "NewtonTrace": "nls.newton", "snes_solve": "nls.newton",
+    "SNESNewton": "nls.newton",
     "solve_steps": "nls.stepping", "IncrementRecord": "nls.stepping",
     "ConvergenceError": "errors", "add_contact": "fem.snes", "SNESContact": "fem.snes",
     "Linear": "contact.laws", "Exponential": "contact.laws", "Tabular": "contact.laws",

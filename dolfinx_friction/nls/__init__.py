@@ -4,7 +4,7 @@ factorisation, the condensed path) with their PETSc options."""
 from dolfinx_friction._lazy import lazy_names
 
 _PUBLIC = {
-    "Newton": "newton", "NewtonTrace": "newton", "snes_solve": "newton",
+    "Newton": "newton", "NewtonTrace": "newton", "snes_solve": "newton", "SNESNewton": "newton",
     "solve_steps": "stepping", "IncrementRecord": "stepping", "ConvergenceError": "stepping",
     "LinearSolver": "linear", "Condensed": "linear",
 }

@@ -341,14 +341,15 @@ def _record_changes(problem: BlockProblem, before: list, now: list, trace: Newto
 
 
 def snes_solve(problem: BlockProblem, prefix: str = "dolfinx_friction_snes_",
-               options: Optional[dict] = None) -> int:
+               options: Optional[dict] = None) -> PETSc.SNES:
     """Solve an increment with PETSc SNES (``newtonls`` unless the options say otherwise;
     every SNES/KSP option and monitor under ``prefix`` applies).  The contacts must have
     begun; they are paired at every residual evaluation, without a new search (the
-    couplings stay those of :meth:`BlockProblem.matrix`).  Returns SNES's converged
-    reason (> 0: converged); a converged state in which a body can move rigidly with
-    nothing to hold it raises :class:`~dolfinx_friction.ContactSetupError`
-    (:meth:`BlockProblem.check_held`)."""
+    couplings stay those of :meth:`BlockProblem.matrix`).  Returns the SNES, solved:
+    ``getConvergedReason()`` (> 0: converged), ``getIterationNumber()``,
+    ``getConvergenceHistory()`` (the residual norms); ``destroy()`` it when done.  A
+    converged state in which a body can move rigidly with nothing to hold it raises
+    :class:`~dolfinx_friction.ContactSetupError` (:meth:`BlockProblem.check_held`)."""
     defaults = {"snes_type": "newtonls", "snes_linesearch_type": "bt", "ksp_type": "preonly",
                 "pc_type": "lu", "pc_factor_mat_solver_type": "mumps", "snes_rtol": 1e-9,
                 "snes_atol": 1e-10}
@@ -368,13 +369,36 @@ def snes_solve(problem: BlockProblem, prefix: str = "dolfinx_friction_snes_",
     snes.setFunction(residual, problem.b.duplicate())
     snes.setJacobian(jacobian, A, A)
     snes.setFromOptions()
+    snes.setConvergenceHistory()
     try:
         snes.solve(None, problem.x)
     finally:
         forget_options(written)
-    reason = snes.getConvergedReason()
-    snes.destroy()
     problem.scatter()
-    if reason > 0:
+    if snes.getConvergedReason() > 0:
         problem.check_held()
-    return reason
+    return snes
+
+
+class SNESNewton(Newton):
+    """PETSc SNES in :class:`Newton`'s place, for :func:`~dolfinx_friction.nls.stepping.solve_steps`:
+    each increment by :func:`snes_solve` under ``prefix`` with ``options`` (its
+    ``snes_rtol``/``snes_atol`` are also the tolerances of the postcondition).  The trace
+    holds the residual norms SNES recorded; the contact's status changes are not counted."""
+
+    def __init__(self, prefix: str = "dolfinx_friction_snes_", options: Optional[dict] = None):
+        options = dict(options or {})
+        super().__init__(rtol=float(options.get("snes_rtol", 1e-9)),
+                         atol=float(options.get("snes_atol", 1e-10)), prefix=prefix)
+        self.options = options
+
+    def solve(self, problem: BlockProblem, start: Optional[PETSc.Vec] = None,
+              may_stall: bool = False) -> NewtonTrace:
+        snes = snes_solve(problem, self.prefix, self.options)
+        reason, its = snes.getConvergedReason(), snes.getIterationNumber()
+        norms = [float(r) for r in snes.getConvergenceHistory()[0][: its + 1]]
+        snes.destroy()
+        zeros = [0] * its
+        return NewtonTrace(converged=reason > 0, residuals=norms, status_changes=zeros,
+                           face_changes=list(zeros), backtracks=list(zeros),
+                           reason="" if reason > 0 else f"SNES stopped ({reason})")

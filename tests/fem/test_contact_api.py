@@ -16,7 +16,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction import (NO_ELEMENT, BlockProblem, ContactSetupError, Newton, NodeToSurface,
-                              Surface, create_matrix, rigid_plane, snes_solve, solve_steps)
+                              SNESNewton, Surface, create_matrix, rigid_plane, snes_solve,
+                              solve_steps)
 from dolfinx_friction import _compat as compat
 
 E, NU = 1000.0, 0.3
@@ -206,7 +207,11 @@ def test_snes_matches_newton():
         problem.apply_bcs()
         contact.begin(problem.x)
         if use_snes:
-            assert snes_solve(problem, options={"snes_rtol": 1e-12, "snes_atol": 1e-12}) > 0
+            snes = snes_solve(problem, options={"snes_rtol": 1e-12, "snes_atol": 1e-12})
+            assert snes.getConvergedReason() > 0 and snes.getIterationNumber() >= 1
+            norms = snes.getConvergenceHistory()[0][: snes.getIterationNumber() + 1]
+            assert norms[-1] < 1e-6 * norms[0]  # the residual history is the SNES's own
+            snes.destroy()
         else:
             assert Newton(rtol=1e-12, atol=1e-12).solve(problem).converged
         answers.append(contact.force())
@@ -298,7 +303,8 @@ def test_increments_do_not_depend_on_their_first_iterate():
         contact.obstacle_translation = load
         problem.apply_bcs()
         contact.begin(problem.x)
-        assert snes_solve(problem, options={"snes_rtol": 1e-14, "snes_atol": 1e-13}) > 0
+        assert snes_solve(problem, options={"snes_rtol": 1e-14,
+                                            "snes_atol": 1e-13}).getConvergedReason() > 0
         snes.append(np.concatenate([contact.force(), problem.x.getArray()]))
         contact.commit()
 
@@ -548,3 +554,23 @@ def test_reaction_of_a_dirichlet_condition_in_one_call():
                             compat.vector_space(Vb.mesh, 1))
     with pytest.raises(ContactSetupError, match="reaction: the condition is on none"):
         problem.reaction(other)
+
+
+def test_solve_steps_drives_snes_to_newtons_answer():
+    """solve_steps(..., newton=SNESNewton(...)): the same press and slide as with the
+    package's Newton, every increment's contact force to 1e-8; the increments carry the
+    residual norms SNES recorded."""
+    forces = []
+    for newton in (Newton(rtol=1e-12, atol=1e-11),
+                   SNESNewton(options={"snes_rtol": 1e-12, "snes_atol": 1e-11})):
+        problem, contact = on_plane()
+        seen = []
+        solve_steps(problem, lambda t: setattr(contact, "obstacle_translation", (0.0, 0.03 * t)),
+                    2, newton=newton, on_increment=lambda inc: seen.append(contact.force()))
+        records = solve_steps(problem, lambda t: setattr(contact, "obstacle_translation",
+                                                         (0.02 * t, 0.03)), 2, newton=newton,
+                              on_increment=lambda inc: seen.append(contact.force()))
+        assert all(r.residuals[-1] <= r.tolerance for r in records)
+        forces.append(np.array(seen))
+    assert forces[0].shape == forces[1].shape
+    np.testing.assert_allclose(forces[1], forces[0], rtol=0.0, atol=1e-8 * np.abs(forces[0]).max())

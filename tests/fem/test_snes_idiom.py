@@ -88,7 +88,7 @@ def test_snes_idiom_gives_the_block_problems_answer():
         assert contact.solve() > 0
         pair2.obstacle_translation = load
         pair2.begin(reference.x)
-        assert snes_solve(reference, options=OPTIONS) > 0
+        assert snes_solve(reference, options=OPTIONS).getConvergedReason() > 0
         pair2.commit()
         f, f2 = pair.force(), pair2.force()
         np.testing.assert_allclose(f, f2, rtol=0.0, atol=1e-8 * np.abs(f2).max())
