@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from collections.abc import Sequence
 from typing import Callable, Optional
 
 import numpy as np
@@ -98,7 +99,7 @@ class IncrementSize:
 def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments: int = 1,
                 newton: Optional[Newton] = None, max_cutbacks: int = 6,
                 on_increment: Optional[Callable[[IncrementRecord], None]] = None,
-                postcondition: bool = True) -> list[IncrementRecord]:
+                postcondition: bool = True, history: Sequence = ()) -> list[IncrementRecord]:
     """Ramp what ``load(t)`` prescribes from pseudo-time 0 to 1 in ``increments`` equal
     increments; returns the converged increments.
 
@@ -111,7 +112,10 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
     an increment is accepted only where every body balances and every slave node obeys
     Coulomb (:meth:`BlockProblem.postcondition` against the residual the convergence test
     accepts, :meth:`Newton.residual_tolerance`); one that does not is cut back like one
-    that diverged.  Raises :class:`~dolfinx_friction.ConvergenceError`.
+    that diverged.  ``history``: the user's own state (objects with ``commit()`` and
+    ``rollback()``, e.g. the quadrature-point state of a plasticity model), committed with
+    the contacts' when an increment is accepted and rolled back with them before a cutback.
+    Raises :class:`~dolfinx_friction.ConvergenceError`.
     """
     newton = newton or Newton()
     x = problem.x
@@ -142,6 +146,8 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
         if not ok:
             for c in problem.contacts:
                 c.rollback()
+            for h in history:
+                h.rollback()
             x_n.copy(x)
             problem.scatter()
             size.failed()
@@ -170,6 +176,8 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
             on_increment(record)
         for c in problem.contacts:
             c.commit()
+        for h in history:
+            h.commit()
     x_n.destroy()
     if rate is not None:
         rate.destroy()

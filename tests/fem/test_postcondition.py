@@ -42,13 +42,28 @@ def test_an_increment_that_fails_it_is_cut_back_and_then_refused(monkeypatch):
     the run stops with the reason; ``postcondition=False`` accepts it."""
     problem, contact, g = two_bodies()
     monkeypatch.setattr(contact, "coulomb_excess", lambda: 1.0)
+    history = Counter()
     with pytest.raises(dolfinx_friction.ConvergenceError,
                        match="friction force exceeds mu times its normal force") as info:
         solve_steps(problem, lambda t: g.value.__setitem__(slice(None), (0.0, -0.03 * t)), 1,
-                    max_cutbacks=2)
+                    max_cutbacks=2, history=[history])
     assert info.value.increment == 1 and info.value.cutbacks == 3
+    assert (history.commits, history.rollbacks) == (0, 3)  # the user's state with the contact's
     problem, contact, g = two_bodies()
     monkeypatch.setattr(contact, "coulomb_excess", lambda: 1.0)
     records = solve_steps(problem, lambda t: g.value.__setitem__(slice(None), (0.0, -0.03 * t)),
-                          1, postcondition=False)
-    assert len(records) == 1
+                          1, postcondition=False, history=[history])
+    assert len(records) == 1 and (history.commits, history.rollbacks) == (1, 3)
+
+
+class Counter:
+    """A user's history (say the state of a plasticity model): counts commits, rollbacks."""
+
+    def __init__(self):
+        self.commits = self.rollbacks = 0
+
+    def commit(self):
+        self.commits += 1
+
+    def rollback(self):
+        self.rollbacks += 1
