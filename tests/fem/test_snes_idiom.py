@@ -16,6 +16,7 @@ from mpi4py import MPI
 
 from dolfinx_friction import (BlockProblem, ContactSetupError, NodeToSurface, Surface,
                               add_contact, rigid_plane, snes_solve)
+from tests.fem.test_postcondition import Counter  # a user's history
 
 SNES_PROBLEM = "petsc_options_prefix" in inspect.signature(NonlinearProblem).parameters
 needs_snes = pytest.mark.skipif(not SNES_PROBLEM,
@@ -55,19 +56,6 @@ def block():
 def pair_on(V, tags):
     return NodeToSurface(Surface(V, tags, BOTTOM), rigid_plane([0.0, 0.0], [0.0, 1.0]), E=E,
                          K=100 * E / 0.125, stick_slope=10 * E / 0.125, mu=0.3)
-
-
-class Counter:
-    """A user's history: counts its commits and rollbacks."""
-
-    def __init__(self):
-        self.commits = self.rollbacks = 0
-
-    def commit(self):
-        self.commits += 1
-
-    def rollback(self):
-        self.rollbacks += 1
 
 
 @needs_snes
