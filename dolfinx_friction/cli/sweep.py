@@ -7,10 +7,13 @@ outside brackets, braces and quotes, so ``u=[0,0,-1],[0,0,-2]`` is two vectors a
 ``name="a,b"`` one string; each value is read as ``run --set`` reads it (TOML, else a bare
 string).
 
-Every point is validated with the scene reader before anything runs, then run as its own
-process (``python -m dolfinx_friction run SCENE --out DIR/<point> --quiet --set ...``),
-up to ``jobs`` at a time; the first point runs alone, so that dolfinx compiles the forms
-once for all (its JIT cache), not in several processes at once.  ``DIR/sweep.csv`` is
+Every point is validated with the scene reader before anything runs, then run as
+``run SCENE --out DIR/<point> --quiet --set ...`` in a warm worker process
+(:mod:`~dolfinx_friction.cli.worker`: one per job, each importing the package and dolfinx
+and compiling the forms once, then running point after point in-process, with the exit
+status and stderr a fresh process would give), up to ``jobs`` at a time; the first point
+runs alone, so that dolfinx compiles the forms once for all (its JIT cache), not in
+several processes at once.  ``DIR/sweep.csv`` is
 rewritten (atomically) each time a point ends: one row per ended point, failed points too,
 with the last line its run printed on stderr.
 """
@@ -19,6 +22,7 @@ from __future__ import annotations
 import csv
 import io
 import itertools
+import json
 import os
 import re
 import signal
@@ -182,10 +186,10 @@ class PointResult:
     wall: float
 
 
-def _command(scene: Path, point: Point, directory: Path) -> list[str]:
+def _argv(scene: Path, point: Point, directory: Path) -> list[str]:
+    """The ``run`` command line of a point."""
     sets = [arg for override in point.overrides for arg in ("--set", override)]
-    return [sys.executable, "-m", "dolfinx_friction", "run", str(scene), "--out",
-            str(directory / point.folder), "--quiet", *sets]
+    return ["run", str(scene), "--out", str(directory / point.folder), "--quiet", *sets]
 
 
 def _environment() -> dict[str, str]:
@@ -201,13 +205,52 @@ _INTERRUPTED = {-signal.SIGINT, -signal.SIGTERM, 128 + signal.SIGINT, 128 + sign
 """Exit statuses of a run stopped by Ctrl-C or ``terminate()``."""
 
 
+class _Worker:
+    """A warm process running points one after another (:mod:`~dolfinx_friction.cli.worker`):
+    the imports and the compiled forms are paid once per worker, not once per point."""
+
+    def __init__(self, env: dict[str, str]):
+        self.proc = subprocess.Popen([sys.executable, "-m", "dolfinx_friction.cli.worker"],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                     stderr=subprocess.DEVNULL, text=True, env=env)
+
+    def run(self, argv: list[str]) -> tuple[int, str]:
+        """One point's exit status and stderr; a worker that died gives its own status
+        (negative: the signal that killed it)."""
+        try:
+            self.proc.stdin.write(json.dumps(argv) + "\n")
+            self.proc.stdin.flush()
+            line = self.proc.stdout.readline()
+        except OSError:
+            line = ""
+        if not line:
+            return self.proc.wait(), ""
+        reply = json.loads(line)
+        return int(reply["status"]), str(reply["stderr"])
+
+    @property
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def close(self) -> None:
+        """End the worker (at the end of its input; killed if it does not end in 10 s)."""
+        try:
+            self.proc.stdin.close()
+            self.proc.wait(timeout=10)
+        except (OSError, subprocess.TimeoutExpired):
+            self.proc.kill()
+            self.proc.wait()
+
+
 class _Runner:
-    """Starts the runs and can stop them all (terminate the running ones, start no more)."""
+    """Runs the points on warm workers (one per job, started as needed) and can stop them
+    all (terminate the running points, start no more)."""
 
     def __init__(self, scene: Path, directory: Path):
         self.scene, self.directory, self.env = scene, directory, _environment()
         self.stopped = False
-        self.running: set[subprocess.Popen] = set()
+        self.idle: list[_Worker] = []
+        self.busy: set[_Worker] = set()
         self.lock = threading.Lock()
 
     def __call__(self, point: Point) -> Optional[PointResult]:
@@ -215,29 +258,38 @@ class _Runner:
         with self.lock:
             if self.stopped:
                 return None
-            proc = subprocess.Popen(_command(self.scene, point, self.directory),
-                                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                    stdin=subprocess.DEVNULL, text=True, env=self.env)
-            self.running.add(proc)
-        _, stderr = proc.communicate()
+            worker = self.idle.pop() if self.idle else _Worker(self.env)
+            self.busy.add(worker)
+        status, stderr = worker.run(_argv(self.scene, point, self.directory))
         with self.lock:
-            self.running.discard(proc)
+            self.busy.discard(worker)
+            if self.stopped or not worker.alive:
+                worker.close()
+            else:
+                self.idle.append(worker)
         lines = [line.strip() for line in stderr.splitlines() if line.strip()]
         reason = ""
-        if proc.returncode != 0:
-            reason = lines[-1] if lines else f"killed by signal {-proc.returncode}" \
-                if proc.returncode < 0 else f"exit status {proc.returncode}"
+        if status != 0:
+            reason = lines[-1] if lines else f"killed by signal {-status}" \
+                if status < 0 else f"exit status {status}"
             if self.stopped:  # (the run may have been killed before it could say so)
                 reason = f"stopped with the interrupted sweep ({reason})"
-            elif not lines and proc.returncode in _INTERRUPTED:  # (before the sweep knew)
+            elif not lines and status in _INTERRUPTED:  # (before the sweep knew)
                 reason = f"interrupted ({reason})"
-        return PointResult(point, proc.returncode, reason, time.perf_counter() - start)
+        return PointResult(point, status, reason, time.perf_counter() - start)
 
     def stop(self) -> None:
         with self.lock:
             self.stopped = True
-            for proc in self.running:
-                proc.terminate()  # the run stops after its current increment (exit 143)
+            for worker in self.busy:
+                worker.proc.terminate()  # the point stops after its current increment (143)
+
+    def close(self) -> None:
+        """End every worker."""
+        with self.lock:
+            workers, self.idle = self.idle + list(self.busy), []
+        for worker in workers:
+            worker.close()
 
 
 def run_sweep(scene: Path, points: Sequence[Point], directory: Path, jobs: int,
@@ -266,19 +318,22 @@ def run_sweep(scene: Path, points: Sequence[Point], directory: Path, jobs: int,
         on_result(result, rows[result.point.index])
 
     futures: list[Future] = []
-    with ThreadPoolExecutor(max_workers=jobs) as pool:
-        try:
-            futures.append(pool.submit(runner, points[0]))
-            _wait_all(futures, ended)
-            futures += [pool.submit(runner, point) for point in points[1:]]
-            _wait_all(futures[1:], ended)
-        except BaseException:
-            runner.stop()
-            pool.shutdown(wait=True, cancel_futures=True)
-            for future in futures:  # the points stopped now are rows too
-                if future.done() and not future.cancelled() and future.exception() is None:
-                    ended(future.result())
-            raise
+    try:
+        with ThreadPoolExecutor(max_workers=jobs) as pool:
+            try:
+                futures.append(pool.submit(runner, points[0]))
+                _wait_all(futures, ended)
+                futures += [pool.submit(runner, point) for point in points[1:]]
+                _wait_all(futures[1:], ended)
+            except BaseException:
+                runner.stop()
+                pool.shutdown(wait=True, cancel_futures=True)
+                for future in futures:  # the points stopped now are rows too
+                    if future.done() and not future.cancelled() and future.exception() is None:
+                        ended(future.result())
+                raise
+    finally:
+        runner.close()
     return [results[k] for k in sorted(results)]
 
 

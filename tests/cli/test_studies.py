@@ -97,6 +97,26 @@ def test_sweep_table_matches_each_point(sweep):
     assert abs(float(done[0]["R_block_top_x"])) < abs(float(done[1]["R_block_top_x"]))
 
 
+def test_sweep_points_equal_fresh_runs(sweep, workdir):
+    """Every point of the sweep ran in a warm worker, after other points: its history.csv
+    and contact.csv equal, digit for digit (wall times aside), those of a fresh `run` of
+    the same point, a converged one and a failed one (exit 3)."""
+    _, d = sweep
+    for folder, sets, status in (("step.1.max_iterations=30,contact.0.mu=0.3",
+                                  ["step.1.max_iterations=30", "contact.0.mu=0.3"], 0),
+                                 ("step.1.max_iterations=1,contact.0.mu=0.3",
+                                  ["step.1.max_iterations=1", "contact.0.mu=0.3"], 3)):
+        fresh = workdir / f"fresh_{status}"
+        args = [arg for value in sets for arg in ("--set", value)]
+        assert cli("run", workdir / "swept.toml", "--out", fresh, "--quiet", *args).status \
+            == status
+        for name in ("history.csv", "contact.csv"):
+            _, ours = read_csv(d / folder / name)
+            _, theirs = read_csv(fresh / name)
+            assert [{k: v for k, v in r.items() if k != "wall_s"} for r in ours] == \
+                [{k: v for k, v in r.items() if k != "wall_s"} for r in theirs], name
+
+
 def test_sweep_writes_no_partial_table(sweep):
     _, d = sweep
     assert sorted(p.name for p in d.iterdir() if p.name.startswith(".")) == []

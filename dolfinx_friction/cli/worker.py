@@ -1,0 +1,64 @@
+"""A warm process for the points of a sweep: it imports the package, dolfinx and the form
+compiler once and runs one ``run`` command line after another, in-process.
+
+    python -m dolfinx_friction.cli.worker
+
+Protocol (JSON lines): each line on stdin is the argv of one command (``["run", scene,
+"--out", dir, "--quiet", "--set", ...]``); for each, one line on stdout,
+``{"status": exit status, "stderr": what the command printed on stderr}``, exactly what
+a fresh ``dolfinx-friction`` process would have given (its own stdout is discarded).  The
+worker ends at the end of stdin, or after a command that was interrupted (exit 130 or
+143: the sweep is being stopped).  Nothing of a command stays for the next one but the
+caches (compiled forms and kernels, imported modules): each ``main()`` builds its scene,
+solvers and PETSc options afresh and removes them.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+
+from dolfinx_friction.cli.exits import EXIT_INTERNAL
+
+#: exit statuses after which the worker stops (the point was interrupted)
+STOPPING = (130, 143)
+
+
+def run_captured(argv: list[str]) -> tuple[int, str]:
+    """Run one command line in this process: its exit status and its stderr."""
+    from dolfinx_friction.cli import frontend
+    with tempfile.TemporaryFile(mode="w+") as err, open(os.devnull, "w") as null:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        saved = os.dup(1), os.dup(2)
+        os.dup2(null.fileno(), 1)
+        os.dup2(err.fileno(), 2)
+        try:
+            status = frontend.main(argv)
+        except SystemExit as exc:  # (argparse's errors)
+            status = exc.code if isinstance(exc.code, int) else EXIT_INTERNAL
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+        err.seek(0)
+        return status, err.read()
+
+
+def main() -> int:
+    protocol = sys.stdout
+    for line in sys.stdin:
+        status, stderr = run_captured(json.loads(line))
+        protocol.write(json.dumps({"status": status, "stderr": stderr}) + "\n")
+        protocol.flush()
+        if status in STOPPING:
+            return status
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
