@@ -163,7 +163,7 @@ def _show_notices(quiet: bool) -> None:
     for old in [h for h in logger.handlers if isinstance(h.formatter, _NoticeFormatter)]:
         logger.removeHandler(old)  # main() called again in this process
     handler = logging.StreamHandler()
-    handler.setLevel(logging.WARNING if quiet else logging.INFO)
+    handler.setLevel(logging.WARNING if quiet else min(logging.INFO, logger.level or logging.INFO))
     handler.setFormatter(_NoticeFormatter())
     logger.addHandler(handler)
     logger.setLevel(min(logger.level or logging.INFO, logging.INFO))  # (--debug: DEBUG)

@@ -10,6 +10,7 @@ history is committed only on convergence.
 from __future__ import annotations
 
 import dataclasses
+import logging
 from dataclasses import dataclass, field
 from collections.abc import Sequence
 from typing import Callable, Optional
@@ -49,6 +50,8 @@ class IncrementRecord:
     def residuals(self) -> list[float]:
         return self.trace.residuals
 
+
+_log = logging.getLogger(__name__)
 
 #: why an increment whose Newton iteration converged is not a result (see :func:`_finite`)
 NON_FINITE = "non-finite displacement, reaction or contact value"
@@ -144,6 +147,10 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
                                                     for c in problem.contacts):
             ok = False  # too coarse to tell a slide off the master from a lost contact
         if not ok:
+            _log.debug("increment %d at t = %.6g (dt = %.3g) cut back after %d Newton "
+                       "iterations: %s", len(records) + 1, t + dt, dt, trace.iterations,
+                       why or ("a contact zone vanished" if trace.converged
+                               else f"not converged (residuals {trace.residuals[-3:]})"))
             for c in problem.contacts:
                 c.rollback()
             for h in history:
