@@ -214,8 +214,10 @@ tar -C "$ROOT" -cf - \
 took "unpacking the rootfs and copying the repo" "$start"
 
 # in_chroot CMD...: run a command in the chroot, in the copied repo, with a clean environment.
+# (LIMIT: a command prefix, set by `limited` below)
+LIMIT=()
 in_chroot() {
-    chroot "$R" /usr/bin/env -i \
+    "${LIMIT[@]}" chroot "$R" /usr/bin/env -i \
         PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
         HOME=/work/home XDG_CACHE_HOME=/work/cache TMPDIR=/work/tmp \
         LANG=C.UTF-8 PYTHONPATH=/work/repo PYTHONDONTWRITEBYTECODE=1 PYTHONNOUSERSITE=1 \
@@ -233,10 +235,18 @@ print("chroot.sh: " + sys.argv[1] + ": Python %s, dolfinx %s, basix %s, ufl %s, 
          gmsh.__version__))
 ' "$SUITE"
 
+# Each pytest run is stopped after DOLFINX_FRICTION_TEST_TIMEOUT seconds (default 1800): a
+# test that fails on one rank only can leave the other rank waiting in a collective.
+limited() {
+    local LIMIT=(timeout --kill-after=30 "${DOLFINX_FRICTION_TEST_TIMEOUT:-1800}")
+    "$@"
+}
+
 describe() {  # describe NAME RC
     case "$2" in
         0) say "$1 passed" ;;
         5) printf 'chroot.sh: %s FAILED: no tests were collected (pytest exit 5)\n' "$1" >&2 ;;
+        124|137) printf 'chroot.sh: %s FAILED: stopped after its time limit (hung?)\n' "$1" >&2 ;;
         *) printf 'chroot.sh: %s FAILED (exit code %s)\n' "$1" "$2" >&2 ;;
     esac
 }
@@ -250,7 +260,7 @@ done
 start="$(now)"
 say "$SUITE serial run: pytest -q -p no:cacheprovider ${targets[*]} ${SERIAL_SKIP[*]} ${PYTEST_ARGS[*]}"
 serial_rc=0
-in_chroot python3 -m pytest -q -p no:cacheprovider "${targets[@]}" "${SERIAL_SKIP[@]}" \
+limited in_chroot python3 -m pytest -q -p no:cacheprovider "${targets[@]}" "${SERIAL_SKIP[@]}" \
     "${PYTEST_ARGS[@]}" || serial_rc=$?
 describe "$SUITE serial run" "$serial_rc"
 took "$SUITE serial run" "$start"
@@ -261,7 +271,7 @@ mpi_targets=("${MPI_TESTS[@]}")
 say "$SUITE MPI run: mpirun -n 2 pytest -q -p no:cacheprovider ${mpi_targets[*]} ${PYTEST_ARGS[*]}"
 mpi_rc=0
 # Only rank 0 prints; the other rank's output is shown when the run fails.
-in_chroot mpirun -n 2 --oversubscribe --bind-to none \
+limited in_chroot mpirun -n 2 --oversubscribe --bind-to none \
     bash -c '
         if [[ "${OMPI_COMM_WORLD_RANK:-0}" == 0 ]]; then
             exec "$@"

@@ -23,6 +23,7 @@ one, together with the user's own history (``history``: objects with ``commit()`
 """
 from __future__ import annotations
 
+import weakref
 from collections.abc import Sequence
 from typing import Protocol
 
@@ -66,11 +67,12 @@ class SNESContact:
                 raise ContactSetupError(f"history: {h!r} has no commit() and rollback()")
         b, (residual, r_args, r_kwargs) = self.snes.getFunction()
         _A, _P, (jacobian, j_args, j_kwargs) = self.snes.getJacobian()
-        if isinstance(getattr(residual, "__self__", None), SNESContact):
+        if hasattr(residual, "contact"):
             raise ContactSetupError("add_contact: this problem already has contacts added")
         self._user = ((residual, r_args, r_kwargs or {}), (jacobian, j_args, j_kwargs or {}))
         self._b = b
-        self.snes.setFunction(self._residual, b)
+        self._callbacks = _callbacks(self)
+        self.snes.setFunction(self._callbacks[0], b)
         self.A: PETSc.Mat | None = None
         self._started = False
 
@@ -150,12 +152,29 @@ class SNESContact:
         if self.A is not None:
             self.A.destroy()
         self.A = create_matrix(self._forms, self.contacts)
-        self.snes.setJacobian(self._jacobian, self.A, self.A)
+        self.snes.setJacobian(self._callbacks[1], self.A, self.A)
 
     def _require_started(self) -> None:
         if not self._started:
             raise ContactSetupError("the contacts have not begun this increment: call "
                                     "SNESContact.solve() (or begin() before problem.solve())")
+
+
+def _callbacks(contact: SNESContact) -> tuple:
+    """The SNES callbacks of ``contact``, holding it by a weak reference: no reference cycle
+    through the problem's SNES, so the objects are freed where the user drops them, on every
+    rank at once (PETSc's destroy is collective; a garbage collector's pass comes at a
+    different moment on each rank)."""
+    ref = weakref.ref(contact)
+
+    def residual(snes, x, b):
+        ref()._residual(snes, x, b)
+
+    def jacobian(snes, x, A, P):
+        ref()._jacobian(snes, x, A, P)
+
+    residual.contact = jacobian.contact = ref
+    return residual, jacobian
 
 
 def add_contact(problem, contacts: Sequence[NodeToSurface], bcs: Sequence = (),

@@ -1,0 +1,110 @@
+"""A study of a small scene: a 10-point sweep of mu against CalculiX running the 10 decks.
+
+    python benchmarks/bench_sweep.py                 # RESULTS.md section
+    python benchmarks/bench_sweep.py --no-results    # print only
+
+The scene is ``bench_small.py``'s ``boxes`` (a block pressed onto a foundation and slid,
+801 dofs, 1 + 10 increments, K and lambda by CalculiX's rules) at mu = 0.05, 0.10, ...,
+0.50.  Timed, one after the other, each as a user runs it (wall time of the whole
+command, start-up included; CPU of the child processes):
+
+* ``sweep -j 1`` and ``sweep -j 2``: ``dolfinx-friction sweep boxes.toml --set
+  contact.0.mu=...`` (warm worker processes, one per job);
+* ``fresh runs``: ``dolfinx-friction run --set contact.0.mu=... --quiet`` once per point;
+* ``ccx``: ``ccx -i`` on each of the 10 decks (one thread), one after the other.
+
+Asserted: every point's final reactions in the sweep equal the fresh run's to 1e-12
+relative (the same computation), and CalculiX's within 0.5 % (bench_ccx measured 0.037 % on
+this scene).
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import subprocess
+import sys
+import time
+
+import _bench as B  # noqa: I001
+import numpy as np
+
+import bench_small as S
+
+MUS = [round(0.05 * k, 2) for k in range(1, 11)]
+
+
+def timed(cmd: list[str], cwd, env) -> tuple[float, float]:
+    w0, c0 = time.perf_counter(), B.children_cpu()
+    subprocess.run(cmd, cwd=cwd, env=env, check=False, capture_output=True)
+    return time.perf_counter() - w0, B.children_cpu() - c0
+
+
+def final_reaction(history) -> np.ndarray:
+    with open(history, newline="") as f:
+        last = list(csv.DictReader(f))[-1]
+    return np.array([float(last[f"R_block_top_{a}"]) for a in "xyz"])
+
+
+def main(argv=None) -> None:
+    from dolfinx_friction.reference import calculix
+    from dolfinx_friction.scene.toml import load_scene
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--no-results", action="store_true")
+    args = ap.parse_args(argv)
+    toml = S.prepare("boxes")
+    d, py = toml.parent, B.PYTHON
+    env = dict(os.environ, PYTHONPATH=str(B.ROOT), OMP_NUM_THREADS="1",
+               DOLFINX_FRICTION_CACHE=str(B.work_dir("small") / "mesh_cache"))
+    ccx_env = dict(env, CCX_NPROC_STIFFNESS="1", CCX_NPROC_EQUATION_SOLVER="1",
+                   CCX_NPROC_RESULTS="1")
+    values = ",".join(str(m) for m in MUS)
+    decks = []
+    for mu in MUS:
+        inp = d / f"boxes_mu{mu}.inp"
+        calculix.write_inp(load_scene(toml, [f"contact.0.mu={mu}"]), inp)
+        decks.append(inp)
+    machine = B.machine()  # (the load at the start)
+    rows = {}
+    for jobs in (1, 2):
+        out = d / f"sweep_j{jobs}"
+        rows[f"sweep -j {jobs}"] = timed([py, "-m", "dolfinx_friction", "sweep", toml.name,
+                                          "--set", f"contact.0.mu={values}", "-j", str(jobs),
+                                          "--out", out.name, "--quiet"], d, env)
+    w0, c0 = time.perf_counter(), B.children_cpu()
+    for mu in MUS:
+        subprocess.run([py, "-m", "dolfinx_friction", "run", toml.name, "--quiet", "--out",
+                        f"fresh_mu{mu}", "--set", f"contact.0.mu={mu}"], cwd=d, env=env,
+                       check=True, capture_output=True)
+    rows["fresh runs"] = (time.perf_counter() - w0, B.children_cpu() - c0)
+    w0, c0 = time.perf_counter(), B.children_cpu()
+    ccx = [calculix.run_ccx(inp, details=True, threads=1) for inp in decks]
+    rows["ccx"] = (time.perf_counter() - w0, B.children_cpu() - c0)
+    load1 = B.load_average()
+    worst_fresh, worst_ccx = 0.0, 0.0
+    for mu, result in zip(MUS, ccx):
+        fresh = final_reaction(d / f"fresh_mu{mu}" / "history.csv")
+        for jobs in (1, 2):
+            swept = final_reaction(d / f"sweep_j{jobs}" / f"contact.0.mu={mu}" / "history.csv")
+            worst_fresh = max(worst_fresh, np.abs(swept - fresh).max() / np.abs(fresh).max())
+        steps = result.reactions
+        last = steps[max(steps)]
+        theirs = np.asarray(last[max(last)]["block_top"])
+        worst_ccx = max(worst_ccx, np.linalg.norm(fresh - theirs) / np.linalg.norm(theirs))
+    assert worst_fresh <= 1e-12, worst_fresh
+    assert worst_ccx <= 5e-3, worst_ccx
+    table = [[key, f"{wall:.2f}", f"{cpu:.2f}", f"{wall / rows['ccx'][0]:.2f}"]
+             for key, (wall, cpu) in rows.items()]
+    text = (f"`benchmarks/bench_sweep.py`: {B.machine_line(machine, load1)}.\n\n"
+            "A 10-point sweep of mu (0.05 to 0.50) of bench_small's `boxes` scene (801 dofs, "
+            "1 + 10 increments) as a user runs it, start-up included, against `ccx` on the 10 "
+            "decks one after the other.  Every point's final reactions: sweep = fresh run "
+            f"(worst {worst_fresh:.1e} relative), CalculiX within {100 * worst_ccx:.3f} %.\n\n"
+            + B.table(["command", "wall [s]", "CPU [s]", "wall / ccx"], table))
+    print(text)
+    if not args.no_results:
+        B.write_section("Studies: a 10-point sweep against ccx", text)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
