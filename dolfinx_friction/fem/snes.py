@@ -35,6 +35,9 @@ from dolfinx_friction.fem.node_to_surface import NodeToSurface, create_matrix
 
 __all__ = ["History", "SNESContact", "add_contact"]
 
+#: the options prefix of this package's own solvers (Newton, snes_solve, LinearSolver)
+PACKAGE_PREFIX = "dolfinx_friction_"
+
 
 class History(Protocol):
     """A piece of history (state at the last converged increment) a cutback must undo."""
@@ -54,6 +57,10 @@ class SNESContact:
         self.problem, self.contacts = problem, list(contacts)
         self.bcs, self.history = list(bcs), list(history)
         self.snes: PETSc.SNES = parts.snes
+        prefix = self.snes.getOptionsPrefix() or ""
+        if prefix.startswith(PACKAGE_PREFIX):
+            raise ContactSetupError(f"add_contact: the problem's options prefix {prefix!r} is "
+                                    f"this package's own ({PACKAGE_PREFIX!r}...): choose another")
         self._forms = parts.J
         spaces = parts.spaces
         for c in self.contacts:

@@ -128,6 +128,10 @@ def test_bad_input_gets_one_clear_line():
     del contact
     with pytest.raises(ContactSetupError, match="is not a dolfinx.fem.petsc.NonlinearProblem"):
         add_contact(object(), [])
+    clash = NonlinearProblem(F, u, bcs=[held], petsc_options_prefix="dolfinx_friction_snes_",
+                             petsc_options=OPTIONS)
+    with pytest.raises(ContactSetupError, match="options prefix 'dolfinx_friction_snes_' is"):
+        add_contact(clash, [pair_on(V, tags)])
 
 
 @pytest.mark.skipif(SNES_PROBLEM, reason="dolfinx >= 0.10 has the SNES NonlinearProblem")
