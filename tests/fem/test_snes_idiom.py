@@ -140,7 +140,8 @@ def test_two_bodies_as_blocks_give_the_block_problems_answer():
 def test_a_failed_increment_rolls_back_the_users_history():
     """One SNES iteration allowed on a slide increment: it fails, the user's history and
     the contact's are rolled back and the displacement is that of the increment's start;
-    the increment then succeeds with the iterations it needs."""
+    so too where SNES raises on the failure (snes_error_if_not_converged); the increment
+    then succeeds with the iterations it needs."""
     V, tags, u, F, held = block()
     pair = pair_on(V, tags)
     problem = NonlinearProblem(F, u, bcs=[held], petsc_options_prefix="test_rollback_",
@@ -155,9 +156,15 @@ def test_a_failed_increment_rolls_back_the_users_history():
     assert contact.solve() <= 0
     assert (log.commits, log.rollbacks) == (1, 1)
     np.testing.assert_array_equal(u.x.array, start)
+    contact.snes.setErrorIfNotConverged(True)  # the failure raised: rolled back as well
+    with pytest.raises(Exception):
+        contact.solve()
+    assert (log.commits, log.rollbacks) == (1, 2)
+    np.testing.assert_array_equal(u.x.array, start)
+    contact.snes.setErrorIfNotConverged(False)
     contact.snes.setTolerances(max_it=50)
     assert contact.solve() > 0
-    assert (log.commits, log.rollbacks) == (2, 1)
+    assert (log.commits, log.rollbacks) == (2, 2)
 
 
 @needs_snes
