@@ -28,7 +28,7 @@ from dolfinx_friction import _compat as compat
 from dolfinx_friction.fem.pattern import CooPattern
 from dolfinx_friction.fem.rigid_motions import RigidMotions
 from dolfinx_friction.fem.numbering import DofLayout
-from dolfinx_friction.fem.node_to_surface import ContactSetupError, NodeToSurface
+from dolfinx_friction.fem.node_to_surface import ContactSetupError, NodeToSurface, Surface
 
 #: Residual norms below this many round-off units of the terms they sum (|J| |x| + |f_ext|
 #: + the contact forces' sensitivity to the coordinates) are converged: Newton cannot
@@ -278,19 +278,31 @@ class BlockProblem:
             rows += [start + compat.bc_local_dofs(bc, body.n_owned) for bc in body.bcs]
         return np.unique(np.concatenate(rows)) if rows else np.zeros(0, dtype=np.int64)
 
-    def reaction(self, bc) -> np.ndarray:
-        """The force (gdim,) [force] that the Dirichlet condition ``bc`` exerts on its body at
-        the last residual evaluation (:attr:`internal` minus the external forces, summed over
-        the condition's dofs; each dof counted once, by the rank that owns it; a condition on
-        a subspace gives its components only).  Collective."""
-        total = np.zeros(self.gdim)
+    def reaction(self, where) -> np.ndarray:
+        """The force (gdim,) [force] that holds a body at the dofs of ``where``: a
+        Dirichlet condition (a condition on a subspace gives its components only) or a
+        facet group ``Surface(V, tags, value)`` (its facets' dofs, e.g. part of a held
+        edge; zero at convergence where nothing holds them).  The sum over those dofs of
+        :attr:`internal` minus the external forces at the last residual evaluation, each
+        dof counted once, by the rank that owns it.  Collective."""
         for k, body in enumerate(self.bodies):
-            if compat.bc_on_space(bc, body.V):
-                dofs = compat.bc_local_dofs(bc, body.n_owned)
-                rows = self.block_slice(k).start + dofs
-                np.add.at(total, dofs % self.gdim, self.internal[rows] - self.f_ext[rows])
-                return self.comm.allreduce(total)
-        raise ContactSetupError("reaction: the condition is on none of the problem's bodies")
+            if isinstance(where, Surface):
+                if where.V is not body.V:
+                    continue
+                fdim = body.V.mesh.topology.dim - 1
+                nodes = compat.locate_nodes(body.V, fdim, compat.tagged(where.tags, where.value))
+                nodes = nodes[nodes < body.n_owned // self.gdim]
+                dofs = (nodes[:, None] * self.gdim + np.arange(self.gdim)).ravel()
+            elif compat.bc_on_space(where, body.V):
+                dofs = compat.bc_local_dofs(where, body.n_owned)
+            else:
+                continue
+            total = np.zeros(self.gdim)
+            rows = self.block_slice(k).start + dofs
+            np.add.at(total, dofs % self.gdim, self.internal[rows] - self.f_ext[rows])
+            return self.comm.allreduce(total)
+        what = "facet group" if isinstance(where, Surface) else "condition"
+        raise ContactSetupError(f"reaction: the {what} is on none of the problem's bodies")
 
     # ------------------------------------------------------------ constraints
     def prescribe(self, rows: np.ndarray, values: np.ndarray) -> None:

@@ -97,20 +97,31 @@ class SNESContact:
 
     def solve(self) -> int:
         """One increment: :meth:`begin`, the problem's ``solve()`` (its SNES), then
-        :meth:`commit` if SNES converged, else :meth:`rollback` (the solution Functions
-        back at the increment's start).  Returns SNES's converged reason (> 0 converged)."""
+        :meth:`commit` if SNES converged, else :meth:`rollback` with the solution Functions
+        back at the increment's start (also where SNES raises, e.g. with
+        ``snes_error_if_not_converged``: then the error propagates).  Returns SNES's
+        converged reason (> 0 converged)."""
         self.begin()
         start = self.problem.x.copy()
-        self.problem.solve()
-        reason = self.snes.getConvergedReason()
-        if reason > 0:
-            self.commit()
-        else:
-            start.copy(self.problem.x)
-            compat.assign_from_vector(self.problem.x, self.problem.u)
-            self.rollback()
-        start.destroy()
-        return reason
+        try:
+            self.problem.solve()
+            reason = self.snes.getConvergedReason()
+            if reason > 0:
+                self.commit()
+            else:
+                self._restore(start)
+            return reason
+        except BaseException:
+            self._restore(start)
+            raise
+        finally:
+            start.destroy()
+
+    def _restore(self, start: PETSc.Vec) -> None:
+        """The solution (vector and Functions) back at ``start``; the histories rolled back."""
+        start.copy(self.problem.x)
+        compat.assign_from_vector(self.problem.x, self.problem.u)
+        self.rollback()
 
     def commit(self) -> None:
         """Accept the increment: the contacts' and ``history``'s state become the start of

@@ -2,8 +2,9 @@
 ranks: in full slip the drag over the press force is mu = 0.3 (1e-8), every printed force
 is the serial one (1e-8), and the XDMF time series is written.  The serial run compiles its
 forms afresh (a new JIT cache) and prints nothing on stderr: the package does not print, and the
-form compiler's chatter is silent.  Started from a serial pytest only (it launches its own
-ranks)."""
+form compiler's chatter is silent.  demos/fenicsx_snes.py (the contact on a user's dolfinx
+0.10+ NonlinearProblem) serially and on 2 ranks, or its one line on older releases.
+Started from a serial pytest only (it launches its own ranks)."""
 from __future__ import annotations
 
 import re
@@ -59,3 +60,43 @@ def test_demo_full_slip_ratio_and_ranks(tmp_path):
         forces = _run(ranks, tmp_path / str(ranks))
         scale = np.abs(serial[:, :2]).max()
         assert np.abs(forces[:, :2] - serial[:, :2]).max() < 1e-8 * scale, (ranks, forces)
+
+
+SNES_DEMO = DEMO.with_name("fenicsx_snes.py")
+SNES_LINE = re.compile(r"(press|slide) t = ([\d.]+) +SNES +(\d+) +F_n = (\S+) +F_t = (\S+) +"
+                       r"F_t/F_n = (\S+) +contact (\d+), slip (\d+)")
+
+
+def _run_snes_demo(ranks: int) -> subprocess.CompletedProcess:
+    from dolfinx_friction import _compat as compat
+    command, env = [sys.executable, str(SNES_DEMO)], cli_env()
+    if ranks > 1:
+        command = [*compat.mpirun_command(ranks), *command]
+        env = compat.mpirun_environment(env)
+    proc = subprocess.run(command, capture_output=True, text=True, env=env, timeout=TIMEOUT,
+                          check=False)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return proc
+
+
+def test_snes_demo_full_slip_ratio_and_ranks():
+    """demos/fenicsx_snes.py: on dolfinx 0.10+ every increment converges (the log of
+    increments is the script's own history), full slip gives F_t/F_n = mu = 0.3 (1e-8)
+    and 2 ranks print the serial forces (1e-8); older releases get one line and exit 0."""
+    from tests.fem.test_snes_idiom import SNES_PROBLEM
+    if not SNES_PROBLEM:
+        lines = _run_snes_demo(1).stdout.splitlines()
+        assert len(lines) == 1 and "needs dolfinx >= 0.10" in lines[0], lines
+        return
+    runs = []
+    for ranks in (1, 2):
+        out = _run_snes_demo(ranks).stdout
+        rows = np.array([[float(v) for v in m.groups()[1:]]
+                         for m in map(SNES_LINE.match, out.splitlines()) if m])
+        assert f"{len(rows)} increments, " in out and rows[-1, 0] == 2.0, out
+        runs.append(rows)
+    serial = runs[0]
+    assert abs(serial[-1, 4] - 0.3) < 1e-8 and serial[-1, 6] == serial[-1, 5] > 0
+    scale = np.abs(serial[:, 2:4]).max()
+    assert runs[1].shape == serial.shape
+    assert np.abs(runs[1][:, 2:4] - serial[:, 2:4]).max() < 1e-8 * scale

@@ -529,9 +529,10 @@ def test_reference_pressure_is_per_undeformed_area():
 
 
 def test_reaction_of_a_dirichlet_condition_in_one_call():
-    """BlockProblem.reaction(bc): a block pressed onto a foundation and slid; the reactions
-    at the block's top and the foundation's bottom balance, and the top's is minus the
-    contact force on the block (each dof counted once: 1, 2 and 3 ranks alike)."""
+    """BlockProblem.reaction(bc or facet group): a block pressed onto a foundation and slid;
+    the reactions at the block's top and the foundation's bottom balance, the top's is
+    minus the contact force on the block, and so is the force on the foundation's contact
+    face (each dof counted once: 1, 2 and 3 ranks alike)."""
     Vb, tb = block(0.2, 0.4, 0.6, 0.3, 6, 3)
     Vf, tf = block(0.0, 0.0, 1.0, 0.4, 9, 4, mesh.CellType.triangle)
     ub, uf = fem.Function(Vb), fem.Function(Vf)
@@ -550,6 +551,22 @@ def test_reaction_of_a_dirichlet_condition_in_one_call():
     assert scale > 1.0 and abs(R_top[0]) > 0.1 * scale  # pressed and dragged
     np.testing.assert_allclose(R_top, -R_bottom, rtol=0.0, atol=1e-8 * scale)
     np.testing.assert_allclose(R_top, -contact.force(), rtol=0.0, atol=1e-8 * scale)
+    # facet groups: the held top's facets as its condition; two parts of them that share
+    # no node (the facets from x = 0.2 to 0.3 and from 0.4 to 0.8) sum to it; the free
+    # contact face of the foundation is held by nothing
+    np.testing.assert_allclose(problem.reaction(Surface(Vb, tb, TOP)), R_top, rtol=0.0,
+                               atol=1e-12 * scale)
+    held = tb.find(TOP)
+    x = mesh.compute_midpoints(Vb.mesh, 1, held)[:, 0]
+    parts = mesh.meshtags(Vb.mesh, 1, held, np.where(x < 0.3, 3, np.where(x > 0.4, 4, 5))
+                          .astype(np.int32))
+    R_left, R_right = (problem.reaction(Surface(Vb, parts, v)) for v in (3, 4))
+    assert min(np.abs(R_left).max(), np.abs(R_right).max()) > 0.01 * scale
+    np.testing.assert_allclose(R_left + R_right, R_top, rtol=0.0, atol=1e-12 * scale)
+    np.testing.assert_allclose(problem.reaction(Surface(Vf, tf, TOP)), 0.0, rtol=0.0,
+                               atol=1e-8 * scale)
+    with pytest.raises(ContactSetupError, match="reaction: the facet group is on none"):
+        problem.reaction(Surface(compat.vector_space(Vb.mesh, 1), tb, TOP))
     other = fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(Vb, 1, tb.find(TOP)),
                             compat.vector_space(Vb.mesh, 1))
     with pytest.raises(ContactSetupError, match="reaction: the condition is on none"):

@@ -17,6 +17,8 @@ from petsc4py import PETSc
 
 from dolfinx_friction import (BlockProblem, ContactSetupError, NodeToSurface, Surface,
                               add_contact, rigid_plane, snes_solve)
+from tests.fem.test_contact_api import block as rectangle
+from tests.fem.test_contact_api import neo_hookean
 from tests.fem.test_postcondition import Counter  # a user's history
 
 SNES_PROBLEM = "petsc_options_prefix" in inspect.signature(NonlinearProblem).parameters
@@ -85,11 +87,62 @@ def test_snes_idiom_gives_the_block_problems_answer():
     assert abs(f[0] / f[1]) > 0.1  # the slide reached friction
 
 
+def two_bodies():
+    """A Neo-Hookean block (quadrilaterals) pressed by its top onto a Neo-Hookean
+    foundation (triangles, held at its bottom) and dragged: the residuals, unknowns,
+    Dirichlet conditions, the surfaces (block's bottom, foundation's top) and the block's
+    top displacement."""
+    Vb, tb = rectangle(0.2, 0.4, 0.6, 0.3, 6, 3)
+    Vf, tf = rectangle(0.0, 0.0, 1.0, 0.4, 9, 4, mesh.CellType.triangle)
+    ub, uf = fem.Function(Vb), fem.Function(Vf)
+    top = fem.Constant(Vb.mesh, np.zeros(2))
+    bcs = [fem.dirichletbc(top, fem.locate_dofs_topological(Vb, 1, tb.find(TOP)), Vb),
+           fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(Vf, 1, tf.find(BOTTOM)),
+                           Vf)]
+    residuals = [neo_hookean(ub, ufl.TestFunction(Vb)), neo_hookean(uf, ufl.TestFunction(Vf))]
+    return residuals, [ub, uf], bcs, (Surface(Vb, tb, BOTTOM), Surface(Vf, tf, TOP)), top
+
+
+def pair_between(surfaces, spaces):
+    return NodeToSurface(*surfaces, spaces=spaces, E=E, K=100 * E / 0.1,
+                         stick_slope=10 * E / 0.1, mu=0.3)
+
+
+@needs_snes
+def test_two_bodies_as_blocks_give_the_block_problems_answer():
+    """Two meshes as a block NonlinearProblem (lists of forms, kind="mpi", the Jacobian's
+    off-diagonal blocks None): the couplings between the blocks in the matrix, every
+    increment's contact force equal to BlockProblem + snes_solve to 1e-8."""
+    F, u, bcs, surfaces, top = two_bodies()
+    pair = pair_between(surfaces, [w.function_space for w in u])
+    J = [[ufl.derivative(F[0], u[0]), None], [None, ufl.derivative(F[1], u[1])]]
+    problem = NonlinearProblem(F, u, bcs=bcs, J=J, kind="mpi",
+                               petsc_options_prefix="test_blocks_", petsc_options=OPTIONS)
+    contact = add_contact(problem, [pair], bcs=bcs)
+    F2, u2, bcs2, surfaces2, top2 = two_bodies()
+    pair2 = pair_between(surfaces2, [w.function_space for w in u2])
+    reference = BlockProblem(F2, u2, bcs2, [pair2])
+    for load in [(0.0, -0.01), (0.0, -0.03), (0.01, -0.03), (0.02, -0.03)]:
+        top.value[:] = load
+        assert contact.solve() > 0
+        top2.value[:] = load
+        reference.apply_bcs()
+        pair2.begin(reference.x)
+        assert snes_solve(reference, options=OPTIONS).getConvergedReason() > 0
+        pair2.commit()
+        f, f2 = pair.force(), pair2.force()
+        np.testing.assert_allclose(f, f2, rtol=0.0, atol=1e-8 * np.abs(f2).max())
+    assert abs(f[0]) > 0.1 * abs(f[1])  # the drag is carried by friction
+    with pytest.raises(ContactSetupError, match="its spaces are not the problem's"):
+        add_contact(problem, [pair_between(surfaces, [w.function_space for w in u[::-1]])])
+
+
 @needs_snes
 def test_a_failed_increment_rolls_back_the_users_history():
     """One SNES iteration allowed on a slide increment: it fails, the user's history and
     the contact's are rolled back and the displacement is that of the increment's start;
-    the increment then succeeds with the iterations it needs."""
+    so too where SNES raises on the failure (snes_error_if_not_converged); the increment
+    then succeeds with the iterations it needs."""
     V, tags, u, F, held = block()
     pair = pair_on(V, tags)
     problem = NonlinearProblem(F, u, bcs=[held], petsc_options_prefix="test_rollback_",
@@ -104,9 +157,15 @@ def test_a_failed_increment_rolls_back_the_users_history():
     assert contact.solve() <= 0
     assert (log.commits, log.rollbacks) == (1, 1)
     np.testing.assert_array_equal(u.x.array, start)
+    contact.snes.setErrorIfNotConverged(True)  # the failure raised: rolled back as well
+    with pytest.raises(Exception):
+        contact.solve()
+    assert (log.commits, log.rollbacks) == (1, 2)
+    np.testing.assert_array_equal(u.x.array, start)
+    contact.snes.setErrorIfNotConverged(False)
     contact.snes.setTolerances(max_it=50)
     assert contact.solve() > 0
-    assert (log.commits, log.rollbacks) == (2, 1)
+    assert (log.commits, log.rollbacks) == (2, 2)
 
 
 @needs_snes
@@ -119,14 +178,25 @@ def test_bad_input_gets_one_clear_line():
         add_contact(problem, [pair_on(W, wtags)])
     with pytest.raises(ContactSetupError, match="has no commit"):
         add_contact(problem, [pair_on(V, tags)], history=[object()])
-    contact = add_contact(problem, [pair_on(V, tags)], bcs=[held])
+    pair = pair_on(V, tags)
+    contact = add_contact(problem, [pair], bcs=[held])
     with pytest.raises(ContactSetupError, match="already has contacts"):
         add_contact(problem, [pair_on(V, tags)])
     with pytest.raises(Exception) as info:  # SNES reports it as a PETSc error, chained
         problem.solve()
     assert "have not begun this increment" in str(info.value.__cause__ or info.value.__context__
                                                    or info.value)
+    pair.obstacle_translation = (0.0, 0.02)
+    contact.begin()  # the problem's own matrix back in SNES: no slots for the couplings
+    contact.snes.setJacobian(contact.snes.getJacobian()[2][0], problem.A, problem.A)
+    with pytest.raises(Exception) as info:
+        problem.solve()
+    assert "the matrix has no slots for the current contact couplings" in str(
+        info.value.__cause__ or info.value.__context__ or info.value)
     del contact
+    scalar = fem.functionspace(V.mesh, ("Lagrange", 1))
+    with pytest.raises(ContactSetupError, match="the function space has 1 component"):
+        pair_on(scalar, tags)
     with pytest.raises(ContactSetupError, match="is not a dolfinx.fem.petsc.NonlinearProblem"):
         add_contact(object(), [])
     # dolfinx 0.11 leaves petsc_options in PETSc's options database (its del ignores the
