@@ -42,6 +42,7 @@ from dolfinx_friction import rules
 from dolfinx_friction.contact.element import OPEN, ContactParameters
 from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.errors import ContactSetupError
+from dolfinx_friction.fem.axisymmetric import section_fault
 from dolfinx_friction.fem.contact_settings import CALCULIX, ContactSettings
 from dolfinx_friction.fem.numbering import BodyField, DofLayout
 from dolfinx_friction.fem.obstacles import (  # noqa: F401  (rigid_*: re-exported)
@@ -195,6 +196,10 @@ class NodeToSurface:
         ``"consistent"`` (the exact tangent) or ``"calculix"``.
     thickness : float
         Out-of-plane thickness of a 2D (plane) body, scales slave areas.
+    axisymmetric : bool
+        The 2D meshes are meridian sections (r = x >= 0; :mod:`~dolfinx_friction.fem.
+        axisymmetric`): slave areas are those of the revolved faces, the contact forces
+        are per full revolution (``thickness`` is not used).
     pairing_iterations : int
         Newton iterations per increment that re-pair slave nodes (CalculiX: 8; 1 is small
         sliding).
@@ -225,6 +230,7 @@ class NodeToSurface:
                  c0: Optional[float] = None, mu: float = 0.0,
                  stick_slope: Union[float, str, None] = None, E: Optional[float] = None,
                  tangent: str = "consistent", thickness: float = 1.0,
+                 axisymmetric: bool = False,
                  pairing_iterations: int = 8, name: str = "contact",
                  obstacle_index: Optional[int] = None, n_obstacles: int = 0,
                  body_names: tuple[str, str] = ("slave", "master")):
@@ -246,7 +252,7 @@ class NodeToSurface:
         slave_facets = _facets(slave, f"{name}: slave", comm)
         self._fields: list[BodyField] = []
         self._body_names = body_names
-        slave_field = self._field(slave.V, "slave", slave_facets, thickness)
+        slave_field = self._field(slave.V, "slave", slave_facets, thickness, axisymmetric)
         if rigid:
             if master.shape == "cylinder" and self.gdim != 3:
                 raise ContactSetupError(f"{name}: a rigid cylinder needs a 3D mesh (use "
@@ -273,7 +279,8 @@ class NodeToSurface:
                     raise ContactSetupError(f"{name}: slave and master share facets: a "
                                             f"surface cannot contact itself")
             self._obstacle = None
-            self._master_field = self._field(master.V, "master", master_facets, thickness)
+            self._master_field = self._field(master.V, "master", master_facets, thickness,
+                                             axisymmetric)
             # each facet once over all ranks: the ones this rank owns
             master_side = master_faces(self._master_field, "master")
         slaves = SlaveNodes(slave_field, "slave")
@@ -380,7 +387,8 @@ class NodeToSurface:
         return _Parameters(ContactParameters(law, pair.mu, pair.stick_slope, pair.tangent),
                            pair.pairing_iterations)
 
-    def _field(self, V, group: str, facets: np.ndarray, thickness: float) -> BodyField:
+    def _field(self, V, group: str, facets: np.ndarray, thickness: float,
+               axisymmetric: bool) -> BodyField:
         block = next((b for b, W in enumerate(self.spaces) if W is V), None)
         if block is None:
             raise ContactSetupError(f"{self.name}: the {group}'s function space is not one "
@@ -396,7 +404,10 @@ class NodeToSurface:
         groups = {group: (mesh.topology.dim - 1, facets)}
         X = V.tabulate_dof_coordinates()[:, : self.gdim].copy()
         f = BodyField(name, thickness, BodyMesh(name, mesh, groups), V, compat.function(V),
-                      block, self.layout.nodes(block), X)
+                      block, self.layout.nodes(block), X, axisymmetric=bool(axisymmetric))
+        fault = section_fault(f) if f.axisymmetric else ""
+        if fault:
+            raise ContactSetupError(f"{self.name}: {group} (axisymmetric): {fault}")
         self._fields.append(f)
         return f
 

@@ -44,8 +44,10 @@ class Body:
     E: float
     nu: float
     degree: Optional[int] = None  # None: the geometry degree of the mesh
-    plane: str = "strain"  # 2D only: "strain" | "stress" (small strain only)
-    thickness: float = 1.0  # 2D only
+    #: 2D only: "strain" | "stress" (small strain only) | "axisymmetric" (a meridian
+    #: section, r = x >= 0, z = y: values per full revolution)
+    plane: str = "strain"
+    thickness: float = 1.0  # 2D only, not axisymmetric
     model: str = "linear"  # one of MODELS
 
     def __post_init__(self) -> None:
@@ -54,6 +56,10 @@ class Body:
     @property
     def finite_strain(self) -> bool:
         return self.model != "linear"
+
+    @property
+    def axisymmetric(self) -> bool:
+        return self.plane == "axisymmetric"
 
 
 @dataclass(frozen=True)
@@ -217,10 +223,10 @@ RULES: dict[type, Rules] = {
         "E": Key(v.modulus, required=True),
         "nu": Key(v.number(gt=-1, lt=0.5), required=True),
         "degree": Key(v.one_of(1, 2)),
-        "plane": Key(v.one_of("strain", "stress")),
+        "plane": Key(v.one_of("strain", "stress", "axisymmetric")),
         "thickness": Key(v.number(gt=0)),
         "model": Key(v.one_of(*MODELS)),
-    }),
+    }, (v.check_body,)),
     Rigid: obstacles.RULES,
     ContactPair: Rules("contact", {
         "slave": Key(v.name, required=True),

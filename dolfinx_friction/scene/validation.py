@@ -129,6 +129,12 @@ def _check_once_per_step(entries: Sequence[Any], key: str, attr: str) -> None:
         first[name_] = j
 
 
+def check_body(body: Any, key: str) -> None:
+    if body.plane == "axisymmetric" and body.thickness != 1.0:
+        fail(join(key, "thickness"), "does not apply to an axisymmetric body (its values "
+             "are per full revolution)", body.thickness)
+
+
 def check_step(step: Any, key: str) -> None:
     _check_once_per_step(step.bcs, join(key, "bc"), "on")
     _check_once_per_step(step.loads, join(key, "load"), "on")
@@ -309,7 +315,10 @@ def check_groups(scene: Any, meshes: Any) -> None:
         key, v = wrong[0]
         raise ModelError(f"{key} has {len(v)} components, but the mesh {scene.mesh} is "
                          f"{gdim}D (every vector has the mesh dimension)")
-    for b in scene.bodies:
+    for i, b in enumerate(scene.bodies):
+        if gdim == 3 and b.axisymmetric:
+            raise ModelError(f"body.{i}.plane = \"axisymmetric\": body {b.name!r} needs a "
+                             f"2D mesh (a meridian section), the mesh {scene.mesh} is 3D")
         if gdim == 3 and (b.plane != "strain" or b.thickness != 1.0):
             raise ModelError(f"body {b.name!r}: plane/thickness apply to 2D meshes only")
 
