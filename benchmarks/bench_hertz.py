@@ -98,11 +98,34 @@ def mesh_3d(n: int) -> Path:
     return path
 
 
+def mesh_axi(n: int) -> Path:
+    """The 3D problem's sphere as a meridian section (quarter disk of triangles, refined at
+    the pole as :func:`mesh_3d`)."""
+    from dolfinx_friction.reference.meshes import sphere_section
+    path = B.work_dir("hertz") / f"sphere_section_n{n}.msh"
+    if not path.exists():
+        sphere_section(path, R, h_contact=A_NOMINAL / n, h_far=2.0,
+                       refine_radius=2.0 * A_NOMINAL)
+    return path
+
+
+MESHES = {"2d": mesh_2d, "3d": mesh_3d, "axi": mesh_axi}
+
+
 def scene(problem: str, n: int, degree: int, k: float):
     from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Rigid, Scene, Step
     h = A_NOMINAL / n
     out = Output(fields=False, contact_table=False,
                  reactions=("cylinder_top",) if problem == "2d" else ("sphere_top",))
+    if problem == "axi":  # the 3D problem as an axisymmetric section (the reaction: all of F)
+        return Scene(
+            mesh=mesh_axi(n),
+            bodies=(Body("sphere", E, NU, degree=degree, plane="axisymmetric"),),
+            rigids=(Rigid("floor", "plane", point=(0.0, 0.0), normal=(0.0, 1.0)),),
+            contacts=(ContactPair("sphere_surface", "floor", K=k * E / h),),
+            steps=(Step("press", increments=1, bcs=(
+                BC("sphere_axis", (0.0, None)), BC("sphere_top", (0.0, -D3)))),),
+            output=out)
     if problem == "2d":
         return Scene(
             mesh=mesh_2d(n), bodies=(Body("cylinder", E, NU, degree=degree),),
@@ -137,6 +160,9 @@ def measure(result, problem: str) -> dict:
     if problem == "2d":
         P = 2.0 * F
         a_ref, p0_ref = hertz_line(P, R, E_star)
+    elif problem == "axi":
+        P = F  # per full revolution
+        a_ref, p0_ref, _ = hertz_sphere(P, R, E_star)
     else:
         P = 4.0 * F
         a_ref, p0_ref, _ = hertz_sphere(P, R, E_star)
@@ -160,7 +186,7 @@ def measure(result, problem: str) -> dict:
         Xc = X[a_[cross]] + t[:, None] * (X[b_[cross]] - X[a_[cross]])
         radii.append(np.linalg.norm(Xc[:, : d - 1], axis=1))
     radii = np.unique(np.round(np.concatenate(radii), 12))  # shared edges counted once
-    a_gap = float(radii.max() if problem == "2d" else radii.mean()) if len(radii) else math.nan
+    a_gap = float(radii.max() if d == 2 else radii.mean()) if len(radii) else math.nan
     # p0 and a of the elliptic profile p^2 = p0^2 (1 - r^2/a^2) fitted by least squares to
     # the closed nodes with p > 0.2 max p (as demos/hertz_cylinder.py does), leaving out nodes
     # with a negligible share of the slave area (the vertices of T6 faces: 1/999 of a face)
@@ -192,7 +218,7 @@ def run_series(problem: str, degrees: dict, ks, log, rows: list, save=lambda: No
         B.timed_run(scene(problem, ns[0], degree, ks[0]))
         for n in ns:
             t0 = time.perf_counter()
-            (mesh_2d if problem == "2d" else mesh_3d)(n)
+            MESHES[problem](n)
             t_mesh = time.perf_counter() - t0
             for k in ks:
                 if (degree, n, k) in done:
