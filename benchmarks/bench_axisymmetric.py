@@ -68,9 +68,9 @@ def chart(axi: list[dict], full: list[dict], pairs, machine: dict):
     plt = B.pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), dpi=100)
     for ax, key, label in ((axes[0], "dev_p0", "p0"), (axes[1], "dev_a", "a")):
-        for rows, name, style in ((axi, "axisymmetric section", "o-"),
+        for rows, name, style in ((axi[:-1], "axisymmetric section", "o-"),
                                   (full, "3D eighth of a sphere", "s-")):
-            pts = [(r["cpu"], max(r[key], 1e-5), r["n"]) for r in rows[:-1] or rows]
+            pts = [(r["cpu"], max(r[key], 1e-5), r["n"]) for r in rows]
             line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], style, ms=5,
                             label=name)
             for x, y, n in pts:
@@ -85,7 +85,7 @@ def chart(axi: list[dict], full: list[dict], pairs, machine: dict):
         ax.set_ylabel(f"relative error in {label} (elliptic fit) vs converged section")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
-    fig.suptitle("Hertz sphere, P1, K = 10 E/h (labels: a_nominal/h; arrows: 3D run -> "
+    fig.suptitle("Hertz sphere, P1, K = 10 E/h (labels: n = 0.5/h; arrows: 3D run -> "
                  "cheapest section at least as accurate; load "
                  f"{machine['load'][0]:.1f} on {machine['nproc']} cores)", fontsize=9)
     fig.tight_layout()
