@@ -3,7 +3,7 @@ where all ranks see them (``comm``'s ranks wait for rank 0).
 
 Bodies are physical groups of cells, facet groups name the faces the scenes use; lengths
 are dimensionless.  Meridian sections of axisymmetric bodies (r = x >= 0, z = y):
-:func:`thick_cylinders`, :func:`sphere_section`.  The CalculiX comparisons' meshes: :func:`blocks_on_foundation`,
+:func:`thick_cylinders`, :func:`sphere_section`, :func:`ring_section`.  The CalculiX comparisons' meshes: :func:`blocks_on_foundation`,
 :func:`ironing` (with their scenes in :mod:`dolfinx_friction.reference.cases`).
 """
 from __future__ import annotations
@@ -215,6 +215,29 @@ def sphere_section(path: Path, R: float = 10.0, h_contact: float = 0.12,
         group(1, arc, "sphere_surface")
         group(1, top, "sphere_top")
         group(1, axis, "sphere_axis")
+    return write_model(build, path, comm)
+
+
+def ring_section(path: Path, R: float = 5.0, c: float = 1.0, h: float = 0.1,
+                 comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Meridian section (r = x, z = y) of the upper half of an O-ring: the half disk of
+    radius ``c`` (the cord) centred at ``(R, 0)``, ``y >= 0``, triangles of size ``h``.
+
+    Groups: body ``ring``; edges ``ring_surface`` (the arc), ``ring_equator`` (y = 0).
+    """
+    def build():
+        occ = gmsh.model.occ
+        disk = occ.addDisk(R, 0, 0, c, c)
+        box = occ.addRectangle(R - c, 0, 0, 2 * c, c)
+        (half,), _ = occ.intersect([(2, disk)], [(2, box)])
+        occ.synchronize()
+        curves = [t for _, t in gmsh.model.getBoundary([half], oriented=False)]
+        equator = [t for t in curves if abs(occ.getCenterOfMass(1, t)[1]) < 1e-9]
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.model.mesh.generate(2)
+        group(2, [half[1]], "ring")
+        group(1, [t for t in curves if t not in equator], "ring_surface")
+        group(1, equator, "ring_equator")
     return write_model(build, path, comm)
 
 

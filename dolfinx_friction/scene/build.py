@@ -311,11 +311,11 @@ class ContactProblem(DiscreteScene):
             G = ufl.Identity(self.gdim) + ufl.grad(field.u)
             # (axisymmetric: J = det F3 with the hoop stretch; in the meridian plane
             # F3^-T is G^-T)
-            J = ufl.det(deformation_gradient(field.u, self.gdim, True)[1]) \
+            det = ufl.det(deformation_gradient(field.u, self.gdim, True)[1]) \
                 if field.axisymmetric else ufl.det(G)
             N, v = ufl.FacetNormal(field.V.mesh), ufl.TestFunction(field.V)
             # Nanson: n da = J F^-T N dA; the pressure pushes into the body
-            F += _thickness(field) * p * J * ufl.inner(ufl.inv(G).T * N, v) * ds
+            F += _thickness(field) * p * det * ufl.inner(ufl.inv(G).T * N, v) * ds
         return F, J
 
     def _inversion_guard(self, field: BodyField):

@@ -4,13 +4,14 @@ closed forms, serially and under ``mpirun -n 2``.
 * a homogeneous stretch ``F = diag(l_r, l_z, l_r)`` of a solid cylinder: exact with P1, so the
   reaction on its top is ``P_zz pi R^2`` (per full revolution) to round-off, for linear
   elasticity and both finite-strain models (their ``P`` written out here, independently of
-  the package's UFL);
+  the package's UFL); a follower pressure on its top carries p times the deformed area;
 * a shrink fit of two thick cylinders held axially: the contact pressure against Lamé
   (:func:`~dolfinx_friction.reference.analytic.shrink_fit_pressure`);
 * a Hertz sphere on a rigid flat as a quarter disk: contact radius and peak pressure
   against Hertz, the contact forces against the reaction;
 * the public UFL helpers (``revolution_weight``, ``axisymmetric_grad``) and
   ``NodeToSurface(axisymmetric=True)`` by hand reproduce the scene;
+* the assembled Jacobian against finite differences (an O-ring section with friction);
 * bad input: one line naming the key.
 """
 from __future__ import annotations
@@ -34,7 +35,10 @@ from dolfinx_friction.reference.analytic import (
     shrink_fit_pressure)
 from dolfinx_friction.reference.compare import contact_state
 from dolfinx_friction.rules import SceneError
-from dolfinx_friction.scene.model import BC, Body, ContactPair, Rigid, Scene, Step
+from dolfinx_friction.scene.build import ContactProblem
+from dolfinx_friction.scene.driver import Solver
+from dolfinx_friction.scene.model import (BC, Body, ContactPair, Load, Rigid, RigidMotion,
+                                          Scene, Step)
 from dolfinx_friction.scene.runner import run
 from dolfinx_friction.scene.validation import ModelError
 
@@ -78,6 +82,35 @@ def test_homogeneous_stretch(shared_dir, model):
           f"{right:.10g} vs {P[0, 0] * 2 * math.pi * R * H:.10g}")
     assert top == pytest.approx(P[1, 1] * math.pi * R ** 2, rel=1e-9)
     assert right == pytest.approx(P[0, 0] * 2 * math.pi * R * H, rel=1e-9)
+
+
+@pytest.mark.parametrize("model", ["saint-venant-kirchhoff", "neo-hookean"])
+def test_follower_pressure_on_the_revolved_top(shared_dir, model):
+    """A pressure p = 30 on the top of the finite-strain cylinder, free mantle: uniaxial
+    Cauchy stress -p on the deformed top, whose radius is l_r R (l_r from P_rr = 0 and
+    P_zz = -p l_r^2 for F = diag(l_r, l_z, l_r)), so the bottom carries p pi (l_r R)^2."""
+    mesh = meshes.rectangle_2d(shared_dir / "cylinder.msh", n=(4, 2), quads=False)
+    p, R = 30.0, 1.0
+    scene = Scene(mesh=mesh, bodies=(_axisymmetric("block", model),),
+                  steps=(Step("press", increments=3, bcs=(
+                      BC("left", (0.0, None)), BC("bottom", (None, 0.0))),
+                      loads=(Load("top", pressure=p),)),))
+    bottom = run(scene, write=False).increments[-1].reactions["bottom"][1]
+
+    def equations(stretches):
+        lr, lz = stretches
+        P = _first_piola(np.diag([lr, lz, lr]), model)
+        return np.array([P[0, 0], P[1, 1] + p * lr ** 2])
+    x = np.array([1.0, 1.0])
+    for _ in range(30):  # Newton with a central-difference Jacobian
+        J = np.column_stack([(equations(x + e) - equations(x - e)) / 2e-7
+                             for e in 1e-7 * np.eye(2)])
+        x = x - np.linalg.solve(J, equations(x))
+    expected = p * math.pi * (x[0] * R) ** 2
+    print(f"\n{model}: l_r = {x[0]:.6f}, l_z = {x[1]:.6f}, bottom {bottom:.10g} vs "
+          f"{expected:.10g}")
+    assert abs(equations(x)).max() < 1e-9 * p
+    assert bottom == pytest.approx(expected, rel=1e-8)
 
 
 # ------------------------------------------------------------------ shrink fit
@@ -206,6 +239,50 @@ def test_hertz_by_hand(shared_dir):
     for mine, inc in zip(reactions, scene_run.increments):
         ref = inc.reactions["sphere_top"]
         assert np.abs(mine - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+# ------------------------------------------------------------------ tangent
+@pytest.mark.parametrize("model", ["linear", "neo-hookean", "saint-venant-kirchhoff"])
+def test_jacobian_matches_finite_differences(shared_dir, model):
+    """An O-ring section squeezed by a rigid plane with friction (2 increments): the assembled
+    Jacobian (bulk with the hoop term + contact on revolved areas, pairing frozen) is the
+    derivative of the residual."""
+    mesh = meshes.ring_section(shared_dir / "ring.msh", 5.0, 1.0, 0.25)
+    scene = Scene(mesh=mesh, bodies=(_axisymmetric("ring", model),),
+                  rigids=(Rigid("plane", "plane", point=(0.0, 1.0), normal=(0.0, -1.0)),),
+                  contacts=(ContactPair("ring_surface", "plane", mu=0.3, K="calculix",
+                                        stick_slope="calculix"),),
+                  steps=(Step("squeeze", increments=2, bcs=(BC("ring_equator", (None, 0.0)),),
+                              rigid=(RigidMotion("plane", displacement=(0.02, -0.1)),)),))
+    problem = ContactProblem(scene)
+    Solver(problem).run()
+    system = problem.system
+    system.prescribe(np.zeros(0, dtype=np.int64), np.zeros(0))  # no constrained rows
+    x = system.x
+    start = x.copy()
+    start.scale(0.999)  # a start-of-increment state different from the iterate
+    rng = np.random.default_rng(problem.comm.rank)
+    x.setArray(x.getArray() + 1e-5 * rng.standard_normal(x.getLocalSize()))
+    pairs = list(problem.pairs.values())
+    for pair in pairs:
+        pair.begin(x, start=start)
+        pair.update(x)
+    J = system.jacobian(x)
+    v = x.duplicate()
+    v.setArray(rng.standard_normal(v.getLocalSize()))
+    Jv = v.duplicate()
+    J.mult(v, Jv)
+    h = 1e-7
+    residuals = []
+    for sign in (1.0, -2.0):
+        x.axpy(sign * h, v)
+        for pair in pairs:
+            pair.update(x, pairing=False)
+        system.residual(x, system.b)
+        residuals.append(system.b.copy())
+    error = ((residuals[0] - residuals[1]) / (2 * h) - Jv).norm() / Jv.norm()
+    print(f"\n{model}: FD rel error {error:.1e}")
+    assert error < 1e-8, error
 
 
 # ------------------------------------------------------------------ bad input
