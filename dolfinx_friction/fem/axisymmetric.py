@@ -6,8 +6,8 @@ when weighted by :func:`revolution_weight` ``2 pi r``: residuals, reactions and 
 such a body are per full revolution (2 pi), as are the contact areas of its slave nodes
 (:class:`~dolfinx_friction.fem.surfaces.SlaveNodes`).  The hoop component of a gradient is
 ``w_r / r`` (:func:`axisymmetric_grad`), evaluated at quadrature points only, which lie
-off the axis.  The nodes on the axis must be held at ``u_r = 0`` by the user (a bc);
-nothing else is special about them.
+off the axis.  Hold the nodes on the axis at ``u_r = 0`` (a bc; without it the hoop
+stiffness next to the axis keeps ``u_r`` small, not 0); nothing else is special about them.
 
 A body's residual, e.g. linear elasticity (``lam``, ``mu``: Lamé's constants)::
 
