@@ -9,6 +9,7 @@ from typing import Callable, Optional, Sequence, Union
 
 from mpi4py import MPI
 
+from dolfinx_friction.nls.defaults import ITERATIVE, choose
 from dolfinx_friction.scene.model import Scene
 from dolfinx_friction.io.writer import ResultWriter
 from dolfinx_friction.scene.build import ContactProblem
@@ -33,6 +34,23 @@ class RunResult:
     summary: RunSummary
     increments: list[Increment]
     directory: Optional[Path]
+
+
+def linear_solver(problem: ContactProblem, petsc_options: Optional[dict],
+                  reuse: Optional[bool]) -> tuple[Optional[dict], Optional[bool]]:
+    """The linear solver's options and ``reuse_factorisation`` for ``problem``: those given
+    to :func:`run`, else the scene's ``[solver]`` (``"auto"`` chooses by the number of
+    unknowns, :func:`~dolfinx_friction.nls.defaults.choose`); None: MUMPS, as the solver
+    decides."""
+    settings = problem.scene.solver
+    if reuse is None:
+        reuse = settings.reuse_factorisation
+    if petsc_options is not None:
+        return petsc_options, reuse
+    kind = choose(settings.linear, problem.system.x.getSize(), problem.gdim,
+                  settings.direct_max_dofs)
+    options = {**(ITERATIVE if kind == "iterative" else {}), **dict(settings.petsc_options)}
+    return options or None, reuse
 
 
 def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
@@ -65,6 +83,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         raise SceneError("overrides apply to a scene file; change a Scene object with "
                          "dataclasses.replace", key="overrides")
     problem = ContactProblem(scene, comm)
+    petsc_options, reuse_factorisation = linear_solver(problem, petsc_options,
+                                                       reuse_factorisation)
     solver = Solver(problem, petsc_options=petsc_options,
                     reuse_factorisation=reuse_factorisation)
     directory = Path(out) if out is not None else (scene.output.dir or default_output_dir(scene))
