@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import logging
+import resource
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,6 +35,11 @@ class RunResult:
     summary: RunSummary
     increments: list[Increment]
     directory: Optional[Path]
+
+
+def peak_memory_mib() -> float:
+    """This process's peak resident memory so far [MiB] (Linux: ``ru_maxrss`` in KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 def linear_solver(problem: ContactProblem, petsc_options: Optional[dict],
@@ -129,10 +135,16 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
             progress(inc)
 
     def extra() -> dict:  # summary.json beyond the counts: what was run, and the warnings
+        peak = comm.allreduce(peak_memory_mib(), op=MPI.MAX)
         if comm.rank != 0:
             return {}
-        return {**provenance(problem, solver.reaction_groups(), solver.linear),
-                "warnings": list(warnings.values())}
+        linear = solver.linear
+        return {**provenance(problem, solver.reaction_groups(), linear),
+                "linear_solves": None if linear is None else {
+                    "factorisations": linear.factorisations,
+                    "krylov_iterations": linear.krylov_iterations,
+                    "condensed_solves": linear.condensed_solves},
+                "peak_memory_mib": peak, "warnings": list(warnings.values())}
 
     try:
         summary = solver.run(record, control)
