@@ -143,7 +143,7 @@ class LinearSolver:
 
     def solve_split(self, split, b: PETSc.Vec, x: PETSc.Vec) -> Optional[bool]:
         """Solve with the Jacobian given as bulk plus contact
-        (:class:`~dolfinx_friction.fem.block_problem.JacobianSplit`) by :class:`Condensed`; None when
+        (:class:`~dolfinx_friction.fem.jacobian.JacobianSplit`) by :class:`Condensed`; None when
         that does not pay (or failed): then :meth:`solve` with the assembled Jacobian."""
         if not (self.reuse and self._counted) or self._solves < (2 if self._pays else 1):
             return None  # priced once this path solved (with a factorisation it keeps: twice)
