@@ -212,7 +212,8 @@ class DiscreteScene:
                 sigma_inf=pair.sigma_inf, c0=pair.c0, E=body.E, mu=pair.mu,
                 stick_slope=pair.stick_slope, tangent=pair.tangent,
                 thickness=out_of_plane(body.thickness, self.gdim),
-                pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
+                pairing_iterations=pair.pairing_iterations, method=pair.method,
+                augmented_tolerance=pair.augmented_tolerance, name=f"{pair.slave}->{pair.master}",
                 obstacle_index=index, n_obstacles=len(self.scene.rigids),
                 body_names=(body.name, pair.master))
         except ContactSetupError as error:  # e.g. a default K that overflows

@@ -98,6 +98,10 @@ class ContactPair:
     #: Newton iterations per increment in which slave nodes are re-paired;
     #: later iterations keep the pairing frozen (CalculiX: 8).
     pairing_iterations: int = 8
+    #: "penalty" or "augmented" (Uzawa updates until the overclosure and the stick slip
+    #: are below ``augmented_tolerance`` times the slave node spacing)
+    method: str = "penalty"
+    augmented_tolerance: float = 1e-4
 
     def __post_init__(self) -> None:
         validate(self, RULES[ContactPair])

@@ -668,6 +668,10 @@ BAD = [
     ("tabular-nan-overclosure", "rigid3d",
      [put("contact.0.law", "tabular"), put("contact.0.table", [[0, 0], [1.0, math.nan]])],
      ["contact.0.table.1.1 = nan", "finite"]),
+    ("contact-method-unknown", "example", [put("contact.0.method", "lagrange")],
+     ['contact.0.method = "lagrange"', '"penalty", "augmented"']),
+    ("augmented-tolerance-one", "example", [put("contact.0.augmented_tolerance", 1.0)],
+     ["contact.0.augmented_tolerance = 1.0", "< 1"]),
     # [solver]: the linear solver; input files never run code nor choose files to write
     ("solver-unknown-kind", "example", [put("solver", {"linear": "cholesky"})],
      ['solver.linear = "cholesky"', '"auto", "direct", "iterative"']),

@@ -43,6 +43,32 @@ def test_hertz_cylinder():
     assert a_fit == pytest.approx(a, rel=0.03)
 
 
+def _hertz_cylinder_fit(*overrides: str) -> tuple[float, float, list]:
+    """The fitted p0 and a of the Hertz cylinder demo with ``overrides``, and every
+    increment's largest overclosure per slave node spacing."""
+    result = run(DEMOS / "hertz_cylinder.toml", write=False, overrides=list(overrides))
+    st = contact_state(result)
+    closed = st["status"] != 0
+    a_fit, p0_fit = fit_elliptic(st["X"][closed, 0], st["pressure"][closed])
+    return p0_fit, a_fit, [max(inc.penetration.values()) for inc in result.increments]
+
+
+def test_hertz_cylinder_augmented_lagrangian_reaches_the_stiff_penalty_limit():
+    """``method = "augmented"`` at the default K: every increment ends with the
+    overclosure below its tolerance (1e-4 of the slave node spacing; penalty: 7e-3), and
+    the fitted p0 and a are those of the penalty method at K x 100 (7e-5 of the spacing)
+    on the same mesh (measured 0.02 % and 0.01 %; the default penalty is 0.10 % and 0.02 %
+    off), so within 0.1 %; with a tolerance of 1e-6, to 0.005 %."""
+    p0_stiff, a_stiff, _ = _hertz_cylinder_fit("contact.0.K=2.05e7")
+    p0, a, penetration = _hertz_cylinder_fit("contact.0.method=augmented")
+    assert max(penetration) <= 1e-4
+    assert p0 == pytest.approx(p0_stiff, rel=1e-3) and a == pytest.approx(a_stiff, rel=1e-3)
+    p0, a, penetration = _hertz_cylinder_fit("contact.0.method=augmented",
+                                             "contact.0.augmented_tolerance=1e-6")
+    assert max(penetration) <= 1e-6
+    assert p0 == pytest.approx(p0_stiff, rel=5e-5) and a == pytest.approx(a_stiff, rel=5e-5)
+
+
 def test_hertz_sphere_on_rigid_plane():
     """3D quarter sphere on a rigid plane: p0 within 5 %."""
     result = run(DEMOS / "hertz_sphere.toml", write=False)
