@@ -20,6 +20,7 @@ __all__ = [
     "CALCULIX",
     "KEYS",
     "LAWS",
+    "MAX_AUGMENTATIONS",
     "METHODS",
     "PENALTY_PER_SPACING",
     "STICK_SLOPE_PER_SPACING",
@@ -35,6 +36,10 @@ TANGENTS = ("consistent", "calculix")
 #: "penalty": the law's overclosure and the stick's elastic slip stay (small, with K and
 #: lambda); "augmented": Uzawa updates of multipliers remove them to a tolerance
 METHODS = ("penalty", "augmented")
+#: augmented Lagrangian updates an increment may take; one that needs more is cut back (a
+#: Uzawa update divides the violation by about 1 + K / (the structure's stiffness at a
+#: node): 2-4 updates at the default K)
+MAX_AUGMENTATIONS = 25
 
 #: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
 #: h: its node spacing, see :func:`defaults`), from the stability maps

@@ -20,6 +20,7 @@ import numpy as np
 from dolfinx_friction.errors import ConvergenceError
 from dolfinx_friction.nls.newton import Newton, NewtonTrace
 from dolfinx_friction.fem.block_problem import BlockProblem
+from dolfinx_friction.fem.contact_settings import MAX_AUGMENTATIONS
 
 
 @dataclass
@@ -99,18 +100,13 @@ class IncrementSize:
             self.level, self.easy = self.level - 1, 0
 
 
-#: augmented Lagrangian updates an increment may take; one that needs more is cut back (a
-#: Uzawa update divides the violation by about 1 + K / (the structure's stiffness at a
-#: node): 2-4 updates at the default K)
-MAX_AUGMENTATIONS = 25
-
-
 def augment(problem: BlockProblem, newton: Newton, trace: NewtonTrace, start,
             may_stall: bool) -> None:
     """After a converged solve: while a contact pair with ``method="augmented"`` updates
     its multipliers (:meth:`~dolfinx_friction.NodeToSurface.augment`), solve the increment
     again from where it is, joining the iterations to ``trace``; ``trace`` ends
-    unconverged where a solve fails or the updates exceed :data:`MAX_AUGMENTATIONS`."""
+    unconverged where a solve fails or the updates exceed
+    :data:`~dolfinx_friction.fem.contact_settings.MAX_AUGMENTATIONS`."""
     while trace.converged and any([c.augment() for c in problem.contacts
                                    if hasattr(c, "augment")]):
         if trace.augmentations == MAX_AUGMENTATIONS:
