@@ -31,6 +31,19 @@ def test_incline_push_ratio():
     assert H / V == pytest.approx(incline_push_ratio(0.1, 0.3), rel=1e-3)
 
 
+@pytest.mark.parametrize("method", ["penalty", "augmented"])
+def test_incline_push_ratio_to_a_hundredth_of_a_percent(method):
+    """The CGS-4-like incline to 0.01 %: without the tension plateau (sigma_inf = 1e-5:
+    the lifted heel nodes pull no more) H/V is the closed form's with either method
+    (measured +1.1e-6 penalty, +1.9e-6 augmented)."""
+    result = run(DEMOS / "incline.toml", write=False,
+                 overrides=["contact.0.sigma_inf=1e-5", f"contact.0.method={method}"])
+    last = result.increments[-1]
+    assert last.slipping == last.active > 0
+    H, V = last.reactions["block_top"][0], 100.0
+    assert H / V == pytest.approx(incline_push_ratio(0.1, 0.3), rel=1e-4)
+
+
 def test_hertz_cylinder():
     """2D plane strain, quarter model: p0 within 2 %, a within 3 % (measured +1.9 %, -0.5 %)."""
     result = run(DEMOS / "hertz_cylinder.toml", write=False)
