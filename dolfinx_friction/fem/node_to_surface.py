@@ -203,6 +203,11 @@ class NodeToSurface:
     pairing_iterations : int
         Newton iterations per increment that re-pair slave nodes (CalculiX: 8; 1 is small
         sliding).
+    method : str
+        ``"penalty"`` (default) or ``"augmented"``: augmented Lagrangian, multipliers
+        updated by :meth:`augment` (Uzawa) until the overclosure and the elastic slip of
+        sticking nodes are below ``augmented_tolerance`` (default 1e-4) times the slave
+        node spacing, K and lambda unchanged (docs/theory.md §6.5).
     obstacle_index, n_obstacles : int
         For a rigid obstacle whose translation is an unknown of a
         :class:`~dolfinx_friction.BlockProblem` with ``obstacles=n_obstacles`` (force- or
@@ -231,7 +236,8 @@ class NodeToSurface:
                  stick_slope: Union[float, str, None] = None, E: Optional[float] = None,
                  tangent: str = "consistent", thickness: float = 1.0,
                  axisymmetric: bool = False,
-                 pairing_iterations: int = 8, name: str = "contact",
+                 pairing_iterations: int = 8, method: str = "penalty",
+                 augmented_tolerance: float = 1e-4, name: str = "contact",
                  obstacle_index: Optional[int] = None, n_obstacles: int = 0,
                  body_names: tuple[str, str] = ("slave", "master")):
         comm = slave.V.mesh.comm
@@ -247,7 +253,7 @@ class NodeToSurface:
             spaces = [slave.V] if rigid or master.V is slave.V else [slave.V, master.V]
         self.spaces = list(spaces)
         given = self._given(law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
-                            pairing_iterations)
+                            pairing_iterations, method, augmented_tolerance)
         self.layout = DofLayout(comm, [V.dofmap.index_map for V in self.spaces], n_obstacles)
         slave_facets = _facets(slave, f"{name}: slave", comm)
         self._fields: list[BodyField] = []
@@ -343,22 +349,25 @@ class NodeToSurface:
         """The contact settings as used, every default resolved, as plain numbers: ``law``
         (``"linear"``, ``"exponential"``, ``"tabular"``) and its parameters (``K``,
         ``sigma_inf``, ``c0`` / ``c0``, ``p0`` / ``pressures``, ``overclosures``),
-        ``mu``, ``stick_slope``, ``tangent``, ``pairing_iterations`` and the slave node
-        ``spacing`` h the defaults scale with."""
+        ``mu``, ``stick_slope``, ``tangent``, ``pairing_iterations``, ``method``,
+        ``augmented_tolerance`` and the slave node ``spacing`` h the defaults scale with."""
         return {"law": type(self.law).__name__.lower(), **asdict(self.law), "mu": self.mu,
                 "stick_slope": self.stick_slope, "tangent": self.params.element.tangent,
-                "pairing_iterations": self.params.pairing_iterations, "spacing": self.spacing}
+                "pairing_iterations": self.params.pairing_iterations,
+                "method": self.params.method,
+                "augmented_tolerance": self.params.augmented_tolerance, "spacing": self.spacing}
 
     # ------------------------------------------------------------- set-up
     def _given(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
-               pairing_iterations) -> ContactSettings:
+               pairing_iterations, method, augmented_tolerance) -> ContactSettings:
         """The parameters as given, checked by the contact settings' rules (the same
         one-line messages as a scene file's ``[[contact]]``); defaults still to be
         resolved."""
         try:
             given = ContactSettings(K=K, sigma_inf=sigma_inf, c0=c0, mu=mu,
                                     stick_slope=stick_slope, tangent=tangent,
-                                    pairing_iterations=pairing_iterations)
+                                    pairing_iterations=pairing_iterations, method=method,
+                                    augmented_tolerance=augmented_tolerance)
             if E is not None:
                 modulus(E, "E")
         except SceneError as error:
@@ -385,7 +394,7 @@ class NodeToSurface:
                                         f"give {key}")
         law = law if law is not None else make_law(pair)
         return _Parameters(ContactParameters(law, pair.mu, pair.stick_slope, pair.tangent),
-                           pair.pairing_iterations)
+                           pair.pairing_iterations, pair.method, pair.augmented_tolerance)
 
     def _field(self, V, group: str, facets: np.ndarray, thickness: float,
                axisymmetric: bool) -> BodyField:
@@ -485,6 +494,22 @@ class NodeToSurface:
         self._evaluated_at = None
         self._interaction.commit()
         self._saved = None
+
+    def augment(self) -> bool:
+        """With ``method="augmented"``, after a converged solve of the increment: one Uzawa
+        update of the multipliers where the overclosure or a sticking node's elastic slip
+        exceeds ``augmented_tolerance`` times the slave node spacing on some node; returns
+        whether it updated them (then solve the increment again: the contact forces are
+        those of the next :meth:`update`).  False with the penalty method.  Collective."""
+        if self.params.method != "augmented":
+            return False
+        inter = self._interaction
+        violation = self.comm.allreduce(inter.violation(), op=MPI.MAX)
+        if not violation > self.params.augmented_tolerance:
+            return False
+        inter.augment()
+        self._evaluated_at = None
+        return True
 
     def rollback(self) -> None:
         """Forget the increment: restore the history saved by :meth:`begin`."""
@@ -777,6 +802,8 @@ class NodeToSurface:
 class _Parameters:
     element: ContactParameters
     pairing_iterations: int
+    method: str
+    augmented_tolerance: float
 
 
 def create_matrix(a, contacts: Sequence[NodeToSurface] = ()) -> PETSc.Mat:

@@ -249,7 +249,8 @@ class DiscreteScene:
                 stick_slope=pair.stick_slope, tangent=pair.tangent,
                 thickness=out_of_plane(body.thickness, self.gdim),
                 axisymmetric=body.axisymmetric,
-                pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
+                pairing_iterations=pair.pairing_iterations, method=pair.method,
+                augmented_tolerance=pair.augmented_tolerance, name=f"{pair.slave}->{pair.master}",
                 obstacle_index=index, n_obstacles=len(self.scene.rigids),
                 body_names=(body.name, pair.master))
         except ContactSetupError as error:  # e.g. a default K that overflows

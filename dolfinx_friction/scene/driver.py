@@ -20,7 +20,7 @@ from dolfinx_friction.nls.newton import Newton
 from dolfinx_friction.scene.build import ContactProblem
 from dolfinx_friction.scene.control import RunControl, checkpoint
 from dolfinx_friction.nls.stepping import IncrementRecord
-from dolfinx_friction.fem.block_problem import Timers
+from dolfinx_friction.fem.timers import Timers
 from dolfinx_friction.fem.loads import unit_loads
 
 

@@ -40,6 +40,7 @@ from dolfinx_friction.rules import (  # noqa: F401  (the engine, re-exported)
     one_of, penalty, place, show, string, suggest, validate, vector)
 from dolfinx_friction.rules import _list_of_2_or_3  # noqa: F401
 from dolfinx_friction.io.files import file_fault
+from dolfinx_friction.nls.defaults import unsafe_option
 
 
 class ModelError(ValueError):
@@ -101,6 +102,31 @@ def items(cls: type, min_length: int = 0) -> Check:
         return tuple(value)
 
     return check
+
+
+def petsc_options(value: Any, key: str) -> tuple[tuple[str, Any], ...]:
+    """PETSc options without their dash (``{ksp_type = "cg", ksp_rtol = 1e-8}``): names of
+    letters, digits and underscores; values strings, numbers or booleans; none that would
+    run code or write a file (:func:`~dolfinx_friction.nls.defaults.unsafe_option`).
+    Kept as sorted ``(name, value)`` pairs (which it takes as well)."""
+    if isinstance(value, (tuple, list)) and all(isinstance(p, tuple) and len(p) == 2
+                                                for p in value):
+        value = dict(value)
+    if not isinstance(value, Mapping):
+        fail(key, "must be a table of PETSc options (name = value)", value)
+    for option, setting in value.items():
+        at = join(key, option)
+        if not (isinstance(option, str) and option.replace("_", "").isalnum()
+                and option[:1].isalpha()):
+            fail(at, "must be a PETSc option name without its dash (letters, digits, _)")
+        if isinstance(setting, float):
+            number()(setting, at)
+        elif not isinstance(setting, (str, int, bool)):
+            fail(at, "must be a string, a number or true/false", setting)
+        why = unsafe_option(option, setting)
+        if why:
+            fail(at, f"is not allowed: it {why}", setting)
+    return tuple(sorted(value.items()))
 
 
 def instance(cls: type) -> Check:
