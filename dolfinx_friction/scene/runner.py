@@ -141,7 +141,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         linear = solver.linear
         return {**provenance(problem, solver.reaction_groups(), linear),
                 "linear_solves": None if linear is None else {
-                    "factorisations": linear.factorisations,
+                    "preconditioner_setups": linear.factorisations,
                     "krylov_iterations": linear.krylov_iterations,
                     "condensed_solves": linear.condensed_solves},
                 "peak_memory_mib": peak, "warnings": list(warnings.values())}
