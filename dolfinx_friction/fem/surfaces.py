@@ -12,9 +12,11 @@ import basix
 import numpy as np
 
 from dolfinx_friction import _compat as compat
-from dolfinx_friction.contact.shapes import FACE_TYPES, FaceType, face_areas, surface_vector
+from dolfinx_friction.contact.shapes import FACE_TYPES, FaceType, surface_vector
+from dolfinx_friction.contact.slave_weights import is_quadratic, shares
 from dolfinx_friction.fem.materials import out_of_plane
 from dolfinx_friction.fem.numbering import BodyField
+from dolfinx_friction.fem.slave_distribution import SlaveDistribution
 
 _FACE_TYPE = {("triangle", 1): "L2", ("triangle", 2): "L3", ("quadrilateral", 1): "L2",
               ("quadrilateral", 2): "L3", ("tetrahedron", 1): "T3", ("tetrahedron", 2): "T6",
@@ -85,8 +87,10 @@ class SlaveNodes:
     """The owned slave nodes of a contact pair on this rank, with their areas ``A_p``.
 
     ``A_p = sum_f w_p,f A_f`` over the slave faces around the node
-    (docs/theory.md §2.1), thickness included in 2D; :meth:`update_areas`
-    recomputes it on the deformed faces (collective).
+    (docs/theory.md §2.1; on quadratic faces the node's share of the linear sub-faces),
+    thickness included in 2D; :meth:`update_areas` recomputes it on the deformed
+    faces (collective), and with it, on quadratic faces, :attr:`distribution`: where each
+    node's contact force acts (None on linear faces: on the node).
     """
 
     def __init__(self, field: BodyField, group: str):
@@ -97,6 +101,8 @@ class SlaveNodes:
         self.local = owned  # local node indices in the slave body
         self.nodes = field.nodes[owned]  # system node indices
         self.X = field.X[owned]  # (n, gdim) reference coordinates
+        self.distribution = (SlaveDistribution(field, self.face, self._facet_nodes, self.nodes)
+                             if is_quadratic(self.face) else None)
         #: (n,) the areas on the undeformed faces
         self.reference_area = self._areas(field.X)
         self.update_areas()
@@ -104,7 +110,10 @@ class SlaveNodes:
     def update_areas(self) -> None:
         """``A_p`` on the faces as deformed by the body's current displacement."""
         f = self.field
-        self.area = self._areas(f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)])
+        x = f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)]
+        self.area = self._areas(x)
+        if self.distribution is not None:
+            self.distribution.update(x)
         thickness = out_of_plane(f.thickness, f.gdim)
         #: nodal spacing: the side of the representative area (its length in 2D)
         self.spacing = self.area / thickness if f.gdim == 2 else np.sqrt(self.area)
@@ -114,9 +123,8 @@ class SlaveNodes:
         (local nodes, gdim) [length^2; in 2D length x thickness]."""
         f = self.field
         thickness = out_of_plane(f.thickness, f.gdim)
-        areas = thickness * face_areas(self.face, x[self._facet_nodes])
         share = np.zeros((self._facet_nodes.size, f.gdim))
-        share[:, 0] = (areas[:, None] * np.asarray(self.face.area_weights)[None, :]).ravel()
+        share[:, 0] = shares(self.face, x[self._facet_nodes], thickness).ravel()
         return f.to_owners(self._facet_nodes.ravel(), share)[self.local, 0]
 
 

@@ -85,8 +85,9 @@ def block_3d(path: Path, n: tuple[int, int, int] = (4, 4, 2), tets: bool = False
 
 
 def two_boxes(path: Path, n_block: tuple[int, int, int] = (4, 4, 2),
-              n_foundation: tuple[int, int, int] = (5, 5, 2)) -> Path:
-    """Block [0.25,0.75]^2 x [0.5,0.75] on foundation [0,1]^2 x [0,0.5] (separate volumes).
+              n_foundation: tuple[int, int, int] = (5, 5, 2), tets: bool = False) -> Path:
+    """Block [0.25,0.75]^2 x [0.5,0.75] on foundation [0,1]^2 x [0,0.5] (separate volumes;
+    structured hexahedra, or with ``tets`` tetrahedra).
 
     Groups: bodies ``block``, ``foundation``; facets ``block_bottom``, ``block_top``,
     ``foundation_top``, ``foundation_bottom``.
@@ -94,7 +95,7 @@ def two_boxes(path: Path, n_block: tuple[int, int, int] = (4, 4, 2),
     def build():
         f = box(0, 0, 0, 1, 1, 0.5)
         b = box(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
-        mesh_boxes([(f, n_foundation), (b, n_block)])
+        mesh_boxes([(f, n_foundation), (b, n_block)], tets)
         group(3, [f], "foundation")
         group(3, [b], "block")
         group(2, boundary(3, f, 2, 0.0), "foundation_bottom")
