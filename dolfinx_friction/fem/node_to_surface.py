@@ -567,7 +567,7 @@ class NodeToSurface:
         """(n, m * gdim) global dofs of the nodes ``nodes`` (n, m), -1 for nodes < 0 and for
         the dofs of ``bcs``."""
         d = self.gdim
-        dofs = (nodes[:, :, None] * d + np.arange(d)).reshape(len(nodes), -1)
+        dofs = (nodes[:, :, None] * d + np.arange(d)).reshape(len(nodes), nodes.shape[1] * d)
         dofs[np.repeat(nodes < 0, d, axis=1)] = -1
         fixed = self._bc_dofs(bcs) if len(bcs) else np.zeros(0, np.int64)
         if len(fixed):

@@ -3,7 +3,8 @@ where all ranks see them (``comm``'s ranks wait for rank 0).
 
 Bodies are physical groups of cells, facet groups name the faces the scenes use; lengths
 are dimensionless.  The CalculiX comparisons' meshes: :func:`blocks_on_foundation`,
-:func:`ironing` (with their scenes in :mod:`dolfinx_friction.reference.cases`).
+:func:`ironing` (with their scenes in :mod:`dolfinx_friction.reference.cases`); Hertz
+contact on a rigid plane: :func:`quarter_disk`, :func:`quarter_sphere`.
 """
 from __future__ import annotations
 
@@ -258,3 +259,74 @@ def ironing(path: Path, length: float = 10.0, height: float = 5.0, radius: float
     finally:
         gmsh.finalize()
     return path
+
+
+def _graded(h_contact: float, h_far: float, refine_radius: float, growth: float) -> None:
+    """Element size ``h_contact`` within ``refine_radius`` of the origin, growing linearly
+    (slope ``growth``) up to ``h_far``."""
+    field = gmsh.model.mesh.field
+    fid = field.add("MathEval")
+    field.setString(fid, "F", f"Min({h_far}, {h_contact} + {growth} * "
+                              f"Max(0, Sqrt(x*x + y*y + z*z) - {refine_radius}))")
+    field.setAsBackgroundMesh(fid)
+    for key in ("Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+                "Mesh.MeshSizeFromCurvature"):
+        gmsh.option.setNumber(key, 0)
+
+
+def quarter_disk(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: float = 2.0,
+                 refine_radius: float = 1.0, growth: float = 0.25, order: int = 1,
+                 comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Quarter disk ``x >= 0``, centre ``(0, R)``, touching ``y = 0`` at the origin;
+    quadrilaterals graded from the origin (:func:`quarter_sphere`'s sizes), of geometric
+    ``order`` 1 or 2 (2: mid-side nodes on the arc).  Groups: body ``cylinder``; edges
+    ``cylinder_surface`` (the arc), ``cylinder_top`` (``y = R``), ``cylinder_symmetry``
+    (``x = 0``) -- as ``demos/hertz_cylinder.py``'s."""
+    def build():
+        geo = gmsh.model.geo
+        c, p0, p1 = geo.addPoint(0, R, 0), geo.addPoint(0, 0, 0), geo.addPoint(R, R, 0)
+        arc, top, sym = geo.addCircleArc(p0, c, p1), geo.addLine(p1, c), geo.addLine(c, p0)
+        disk = geo.addPlaneSurface([geo.addCurveLoop([arc, top, sym])])
+        geo.synchronize()
+        _graded(h_contact, h_far, refine_radius, growth)
+        for key, value in (("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
+                           ("Mesh.RecombinationAlgorithm", 1)):
+            gmsh.option.setNumber(key, value)
+        gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.setOrder(order)
+        for dim, tags, name in ((2, [disk], "cylinder"), (1, [arc], "cylinder_surface"),
+                                (1, [top], "cylinder_top"), (1, [sym], "cylinder_symmetry")):
+            group(dim, tags, name)
+    return write_model(build, path, comm)
+
+
+def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: float = 2.0,
+                   refine_radius: float = 1.0, growth: float = 0.25, order: int = 1,
+                   comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Quarter of the lower hemisphere ``x, y >= 0``, centre ``(0, 0, R)``, touching
+    ``z = 0`` at the origin: tetrahedra of size ``h_contact`` within ``refine_radius`` of
+    the origin, growing linearly (slope ``growth``) up to ``h_far``, of geometric ``order``
+    1 or 2 (2: mid-edge nodes on the sphere).  Groups: body ``sphere``; facets
+    ``sphere_surface`` (the curved surface), ``sphere_top`` (``z = R``),
+    ``sphere_symmetry_x`` (``x = 0``), ``sphere_symmetry_y`` (``y = 0``) -- as
+    ``demos/hertz_sphere.py``'s."""
+    def build():
+        occ = gmsh.model.occ
+        vol = occ.addSphere(0, 0, R, R, angle1=-math.pi / 2, angle2=0.0, angle3=math.pi / 2)
+        occ.synchronize()
+        names: dict[str, list[int]] = {}
+        for _, s in gmsh.model.getBoundary([(3, vol)], oriented=False):
+            c = occ.getCenterOfMass(2, s)
+            name = ("sphere_top" if abs(c[2] - R) < 1e-6 * R else
+                    "sphere_symmetry_x" if abs(c[0]) < 1e-6 * R else
+                    "sphere_symmetry_y" if abs(c[1]) < 1e-6 * R else "sphere_surface")
+            names.setdefault(name, []).append(s)
+        _graded(h_contact, h_far, refine_radius, growth)
+        gmsh.option.setNumber("Mesh.Algorithm", 6)
+        gmsh.option.setNumber("Mesh.Algorithm3D", 10)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(order)
+        group(3, [vol], "sphere")
+        for name, tags in names.items():
+            group(2, tags, name)
+    return write_model(build, path, comm)

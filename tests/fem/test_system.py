@@ -356,11 +356,13 @@ def test_master_normals_point_out_of_the_body(shared_dir):
     assert problem.comm.allreduce(face_areas(faces.face, faces.X).sum()) == pytest.approx(1.0)
 
 
-def test_parallel_run_matches_serial_run(shared_dir, comm):
+@pytest.mark.parametrize("degree", [None, 2])
+def test_parallel_run_matches_serial_run(shared_dir, comm, degree):
     """The same scene on all ranks and on one rank: reactions agree to 1e-8 relative,
-    and under MPI some slave nodes pair with master faces owned by another rank."""
+    and under MPI some slave nodes pair with master faces owned by another rank (P2: and
+    spread their forces over slave faces of another rank)."""
     mesh = meshes.two_boxes(shared_dir / "boxes.msh", n_block=(5, 5, 2), n_foundation=(7, 7, 2))
-    scene = _boxes_scene(mesh, mu=0.3)
+    scene = _boxes_scene(mesh, degree=degree, mu=0.3)
     parallel = run(scene, write=False, comm=comm)
     serial = run(scene, write=False, comm=MPI.COMM_SELF)
     for a, b in zip(parallel.increments, serial.increments):
