@@ -1,7 +1,9 @@
 """Slave nodal areas and where a slave node's force goes on quadratic faces (docs/theory.md §2.1).
 
 Linear faces (L2, T3, Q4) keep CalculiX's lumped shares: node ``k`` of face ``f`` holds
-``w_k A_f`` and its contact force acts on node ``k`` alone.
+``w_k A_f`` and its contact force acts on node ``k`` alone; so do quadratic faces that
+touch a deformable master (the master would receive node ``k``'s force at one point, which
+breaks the patch test: docs/theory.md §2.1).
 
 A quadratic face (L3, T6, Q9) is split into linear sub-faces (:data:`SUBFACES`: 2
 segments, 4 triangles, 4 quadrilaterals through its mid-side and centre nodes).  Node
@@ -76,13 +78,14 @@ def distribution(face: FaceType, coords: Array) -> Array:
     return np.einsum("fq,qi,qk->fik", density, N, L)
 
 
-def shares(face: FaceType, coords: Array, thickness: float = 1.0) -> Array:
+def shares(face: FaceType, coords: Array, thickness: float = 1.0,
+           subfaces: bool = True) -> Array:
     """Each node's share of its face's area (n_faces, nn) for faces with node coordinates
-    ``coords`` (n_faces, nn, gdim), times ``thickness`` (2D): ``w_k A_f`` on linear
-    faces, ``int_f L_k dA`` on quadratic ones (the column sums of :func:`distribution`);
-    a node's area ``A_k`` is the sum of its shares over its faces [area; in 2D length x
-    thickness]."""
-    if is_quadratic(face):
+    ``coords`` (n_faces, nn, gdim), times ``thickness`` (2D): ``int_f L_k dA`` on
+    quadratic faces with ``subfaces`` (the column sums of :func:`distribution`), else
+    ``w_k A_f`` (the face type's ``area_weights``); a node's area ``A_k`` is the sum of
+    its shares over its faces [area; in 2D length x thickness]."""
+    if subfaces and is_quadratic(face):
         return thickness * distribution(face, coords).sum(axis=1)
     areas = thickness * face_areas(face, coords)
     return areas[:, None] * np.asarray(face.area_weights)[None, :]

@@ -276,7 +276,8 @@ class NodeToSurface:
             self._master_field = self._field(master.V, "master", master_facets, thickness)
             # each facet once over all ranks: the ones this rank owns
             master_side = master_faces(self._master_field, "master")
-        slaves = SlaveNodes(slave_field, "slave")
+        # quadratic slave faces spread their nodes' forces on rigid obstacles only (§2.1)
+        slaves = SlaveNodes(slave_field, "slave", subfaces=rigid)
         self._slave_field = slave_field
         # a node's area sums its faces' shares in an order that depends on the partition:
         # 12 digits make h, and the defaults scaled with it, the same on any number of ranks
@@ -336,7 +337,7 @@ class NodeToSurface:
     @property
     def symmetric(self) -> bool:
         """Whether the contact tangent is symmetric: frictionless, with each slave node's
-        force on the node itself (linear slave faces)."""
+        force on the node itself (not spread over quadratic slave faces on an obstacle)."""
         return self.mu == 0.0 and self._interaction.slaves.distribution is None
 
     def resolved(self) -> dict:

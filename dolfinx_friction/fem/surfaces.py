@@ -87,13 +87,14 @@ class SlaveNodes:
     """The owned slave nodes of a contact pair on this rank, with their areas ``A_p``.
 
     ``A_p = sum_f w_p,f A_f`` over the slave faces around the node
-    (docs/theory.md §2.1; on quadratic faces the node's share of the linear sub-faces),
-    thickness included in 2D; :meth:`update_areas` recomputes it on the deformed
-    faces (collective), and with it, on quadratic faces, :attr:`distribution`: where each
-    node's contact force acts (None on linear faces: on the node).
+    (docs/theory.md §2.1; with ``subfaces``, on quadratic faces, the node's share of their
+    linear sub-faces), thickness included in 2D; :meth:`update_areas` recomputes it on
+    the deformed faces (collective), and with it, with ``subfaces`` on quadratic faces,
+    :attr:`distribution`: where each node's contact force acts (otherwise None: on the
+    node).
     """
 
-    def __init__(self, field: BodyField, group: str):
+    def __init__(self, field: BodyField, group: str, subfaces: bool = False):
         self.field = field
         self.face, self._facet_nodes = facet_nodes(field, field.mesh.groups[group][1])
         marks = np.ones((self._facet_nodes.size, field.gdim))
@@ -101,8 +102,9 @@ class SlaveNodes:
         self.local = owned  # local node indices in the slave body
         self.nodes = field.nodes[owned]  # system node indices
         self.X = field.X[owned]  # (n, gdim) reference coordinates
+        self._subfaces = subfaces and is_quadratic(self.face)
         self.distribution = (SlaveDistribution(field, self.face, self._facet_nodes, self.nodes)
-                             if is_quadratic(self.face) else None)
+                             if self._subfaces else None)
         #: (n,) the areas on the undeformed faces
         self.reference_area = self._areas(field.X)
         self.update_areas()
@@ -124,7 +126,7 @@ class SlaveNodes:
         f = self.field
         thickness = out_of_plane(f.thickness, f.gdim)
         share = np.zeros((self._facet_nodes.size, f.gdim))
-        share[:, 0] = shares(self.face, x[self._facet_nodes], thickness).ravel()
+        share[:, 0] = shares(self.face, x[self._facet_nodes], thickness, self._subfaces).ravel()
         return f.to_owners(self._facet_nodes.ravel(), share)[self.local, 0]
 
 

@@ -330,3 +330,50 @@ def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: f
         for name, tags in names.items():
             group(2, tags, name)
     return write_model(build, path, comm)
+
+
+def stacked(path: Path, n_lower: int, n_upper: int, dim: int = 2, tets: bool = False,
+            order: int = 1, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Two blocks of the same footprint ``[0,1]^(dim-1)`` stacked on a flat interface
+    (the contact patch test): ``lower`` (height 0.5) and ``upper`` (0.5 to 1), structured
+    (``n_lower``, ``n_upper`` cells along each side of the interface, half as many across
+    each block's height, at least 2), quadrilaterals/hexahedra or with ``tets`` triangles/
+    tetrahedra, of geometric ``order`` 1 or 2.  Groups: ``lower``, ``upper``; facets
+    ``<body>_bottom``, ``<body>_top``, ``<body>_x0`` (``x = 0``) and in 3D ``<body>_y0``
+    (``y = 0``)."""
+    def build():
+        occ = gmsh.model.occ
+        bodies = {}
+        for name, z0, n in (("lower", 0.0, n_lower), ("upper", 0.5, n_upper)):
+            if dim == 2:
+                tag = occ.addRectangle(0, z0, 0, 1, 0.5)
+            else:
+                tag = occ.addBox(0, 0, z0, 1, 1, 0.5)
+            bodies[name] = (tag, n, z0)
+        occ.synchronize()
+        up = dim - 1  # the stacking axis
+        for name, (tag, n, z0) in bodies.items():
+            faces = gmsh.model.getBoundary([(dim, tag)], oriented=False)
+            edges = (faces if dim == 2 else
+                     gmsh.model.getBoundary(faces, combined=False, oriented=False))
+            for _, curve in edges:
+                a, b = gmsh.model.getBoundary([(1, abs(curve))], oriented=False)
+                pa, pb = gmsh.model.getValue(0, a[1], []), gmsh.model.getValue(0, b[1], [])
+                across = abs(pa[up] - pb[up]) > 1e-9
+                gmsh.model.mesh.setTransfiniteCurve(abs(curve),
+                                                    (max(n // 2, 2) if across else n) + 1)
+            for _, s in (faces if dim == 3 else [(2, tag)]):
+                gmsh.model.mesh.setTransfiniteSurface(s)
+                if not tets:
+                    gmsh.model.mesh.setRecombine(2, s)
+            if dim == 3:
+                gmsh.model.mesh.setTransfiniteVolume(tag)
+            group(dim, [tag], name)
+            group(dim - 1, boundary(dim, tag, up, z0), f"{name}_bottom")
+            group(dim - 1, boundary(dim, tag, up, z0 + 0.5), f"{name}_top")
+            group(dim - 1, boundary(dim, tag, 0, 0.0), f"{name}_x0")
+            if dim == 3:
+                group(dim - 1, boundary(dim, tag, 1, 0.0), f"{name}_y0")
+        gmsh.model.mesh.generate(dim)
+        gmsh.model.mesh.setOrder(order)
+    return write_model(build, path, comm)
