@@ -587,17 +587,17 @@ class NodeToSurface:
         return f, K, roundoff
 
     def _spread_blocks(self) -> list[tuple]:
-        """The rows the slave nodes' forces spread over on quadratic slave faces
-        (:class:`~dolfinx_friction.fem.slave_distribution.SlaveDistribution`), one block per
-        element: row nodes (n, r), column nodes (n, c), forces (n, r, d), tangents
-        (n, r, d, c, d) and round-off (n, r, d); none on linear faces."""
+        """The rows the slave nodes' forces spread over on quadratic slave faces against a
+        rigid obstacle (:class:`~dolfinx_friction.fem.slave_distribution.SlaveDistribution`),
+        one block per element: row nodes (n, r), column nodes (n, c), forces (n, r, d),
+        tangents (n, r, d, c, d) and round-off (n, r, d; with |T|); none otherwise."""
         distribution = self._interaction.slaves.distribution
         if distribution is None:
             return []
         el = self._evaluated()
         n, k = el.nodes.shape
         rows, f, K = distribution.spread(el.slave, el.result.f[:, -1], el.result.K[:, -1])
-        roundoff = (distribution.weights[el.slave][:, :, None]
+        roundoff = (np.abs(distribution.weights[el.slave])[:, :, None]
                     * el.roundoff.reshape(n, k, self.gdim)[:, None, -1])
         return [(rows, el.nodes, f, K, roundoff)]
 
