@@ -1,10 +1,9 @@
 """Meshes of the benchmarks that no demo provides (built with gmsh on the calling rank).
 
-* :func:`quarter_sphere` -- a quarter of the lower hemisphere of a sphere of radius ``R``
-  resting on ``z = 0``, tetrahedra refined around the first contact point.  Written
-  because ``demos/hertz_sphere.py`` did not exist when ``bench_hertz.py`` was written;
-  that demo's ``build_mesh`` (same geometry and group names) is now used, this one only
-  if the demo is missing.
+* :func:`quarter_sphere` -- ``reference.meshes.quarter_sphere``: a quarter of the lower
+  hemisphere of a sphere of radius ``R`` resting on ``z = 0``, tetrahedra refined around
+  the first contact point; ``demos/hertz_sphere.py``'s ``build_mesh`` (same geometry and
+  group names) is used, this one only if the demo is missing.
 * :func:`two_boxes` -- ``reference.meshes.two_boxes`` (block on a foundation, structured
   hexahedra) at a resolution given by one integer, with a foundation mesh chosen so that
   no slave node lies on an edge of a master face (there the choice of master face is
@@ -15,60 +14,11 @@
 """
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 from _bench import ROOT  # noqa: F401  (sys.path)
 
-
-def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: float = 2.0,
-                   refine_radius: float = 1.0, growth: float = 0.25, order: int = 1) -> Path:
-    """Quarter lower hemisphere ``x, y >= 0``, centre ``(0, 0, R)``, touching ``z = 0`` at the origin.
-
-    Tetrahedra of size ``h_contact`` within ``refine_radius`` of the origin, growing
-    linearly (slope ``growth``) up to ``h_far``.  Groups: body ``sphere``; facets
-    ``sphere_surface`` (the curved surface), ``sphere_top`` (``z = R``),
-    ``sphere_symmetry_x`` (``x = 0``), ``sphere_symmetry_y`` (``y = 0``) -- as the demo's.
-    """
-    import gmsh
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("quarter_sphere")
-        occ = gmsh.model.occ
-        vol = occ.addSphere(0, 0, R, R, angle1=-math.pi / 2, angle2=0.0, angle3=math.pi / 2)
-        occ.synchronize()
-        names = {}
-        for _, s in gmsh.model.getBoundary([(3, vol)], oriented=False):
-            c = occ.getCenterOfMass(2, s)
-            if abs(c[2] - R) < 1e-6 * R:
-                names.setdefault("sphere_top", []).append(s)
-            elif abs(c[0]) < 1e-6 * R:
-                names.setdefault("sphere_symmetry_x", []).append(s)
-            elif abs(c[1]) < 1e-6 * R:
-                names.setdefault("sphere_symmetry_y", []).append(s)
-            else:
-                names.setdefault("sphere_surface", []).append(s)
-        f = gmsh.model.mesh.field
-        fid = f.add("MathEval")
-        f.setString(fid, "F", f"Min({h_far}, {h_contact} + {growth} * "
-                              f"Max(0, Sqrt(x*x + y*y + z*z) - {refine_radius}))")
-        f.setAsBackgroundMesh(fid)
-        for key, value in (("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.MeshSizeFromPoints", 0),
-                           ("Mesh.MeshSizeFromCurvature", 0), ("Mesh.Algorithm", 6),
-                           ("Mesh.Algorithm3D", 10)):
-            gmsh.option.setNumber(key, value)
-        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [vol]), "sphere")
-        for name, tags in names.items():
-            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, tags), name)
-        gmsh.model.mesh.generate(3)
-        if order > 1:
-            gmsh.model.mesh.setOrder(order)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return path
+from dolfinx_friction.reference.meshes import quarter_sphere  # noqa: F401  (re-exported)
 
 
 def foundation_divisions(n: int) -> int:

@@ -196,7 +196,8 @@ def measure(result, problem: str) -> dict:
     a_gap = float(radii.max() if d == 2 else radii.mean()) if len(radii) else math.nan
     # p0 and a of the elliptic profile p^2 = p0^2 (1 - r^2/a^2) fitted by least squares to
     # the closed nodes with p > 0.2 max p (as demos/hertz_cylinder.py does), leaving out nodes
-    # with a negligible share of the slave area (the vertices of T6 faces: 1/999 of a face)
+    # with a negligible share of the slave area (the vertices of T6 faces had 1/999 of a face
+    # before quadratic faces on a rigid obstacle took their areas from sub-faces: 1/12)
     pressure, area = state.pressure[s], state.area[s]
     real = area > 0.05 * np.median(area)
     r = np.linalg.norm(X_el[:, : d - 1], axis=1)
@@ -338,7 +339,8 @@ def report(all_rows: dict, machine: dict, load_end: float, quick: bool, figures:
         "nodal pressures p = F_N/A_p: **p0 fit, a fit** = p0 and a of the elliptic profile "
         "p^2 = p0^2 (1 - r^2/a^2) fitted by least squares to the closed nodes with "
         "p > 0.2 max p (as `demos/hertz_cylinder.py` does; nodes with < 5 % of the median "
-        "area share -- the vertices of T6 faces, weight 1/999 -- left out); **p0 node** = "
+        "area share left out -- none since the sub-face areas of P2 faces; before, the "
+        "vertices of T6 faces, weight 1/999); **p0 node** = "
         "nodal pressure at the first contact point; **a gap** = zero of "
         "the linearly interpolated gap on the slave facet edges that straddle the plane, i.e. "
         "where the penalty pressure drops to zero between the last closed and the first open "

@@ -132,9 +132,10 @@ class BlockProblem:
     def symmetric(self) -> bool:
         """Whether the Jacobian is symmetric once its constrained rows and columns are
         eliminated (``jacobian(x, symmetric=True)``): every body linear with a symmetric
-        stiffness (checked once, to :data:`SYMMETRY_TOL`; collective) and every contact
-        frictionless (its force derives from a potential: contact-theory 7.4)."""
-        return self.bodies_symmetric() and all(c.mu == 0.0 for c in self.contacts)
+        stiffness (checked once, to :data:`SYMMETRY_TOL`; collective) and every contact's
+        tangent symmetric (:attr:`NodeToSurface.symmetric`: frictionless, its force derives
+        from a potential, contact-theory 7.4)."""
+        return self.bodies_symmetric() and all(c.symmetric for c in self.contacts)
 
     def bodies_symmetric(self) -> bool:
         """Whether every body is linear with a symmetric stiffness (checked once, to

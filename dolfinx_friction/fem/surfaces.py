@@ -12,10 +12,12 @@ import basix
 import numpy as np
 
 from dolfinx_friction import _compat as compat
-from dolfinx_friction.contact.shapes import (
-    FACE_TYPES, FaceType, face_areas, revolved_area_shares, surface_vector)
+from dolfinx_friction.contact.shapes import (FACE_TYPES, FaceType, revolved_area_shares,
+                                             surface_vector)
+from dolfinx_friction.contact.slave_weights import is_quadratic, shares
 from dolfinx_friction.fem.materials import out_of_plane
 from dolfinx_friction.fem.numbering import BodyField
+from dolfinx_friction.fem.slave_distribution import SlaveDistribution
 
 _FACE_TYPE = {("triangle", 1): "L2", ("triangle", 2): "L3", ("quadrilateral", 1): "L2",
               ("quadrilateral", 2): "L3", ("tetrahedron", 1): "T3", ("tetrahedron", 2): "T6",
@@ -86,13 +88,16 @@ class SlaveNodes:
     """The owned slave nodes of a contact pair on this rank, with their areas ``A_p``.
 
     ``A_p = sum_f w_p,f A_f`` over the slave faces around the node
-    (docs/theory.md §2.1), thickness included in 2D; on an axisymmetric body the share
+    (docs/theory.md §2.1; with ``subfaces``, on quadratic faces, the node's share of their
+    linear sub-faces), thickness included in 2D; on an axisymmetric body the share
     ``int N_p 2 pi r ds`` of the revolved faces (per full revolution; a node on the axis
-    gets the share of its faces too).  :meth:`update_areas` recomputes it on the deformed
-    faces (collective).
+    gets the share of its faces too; no sub-faces).  :meth:`update_areas` recomputes it on
+    the deformed faces (collective), and with it, with ``subfaces`` on quadratic faces,
+    :attr:`distribution`: where each node's contact force acts (otherwise None: on the
+    node).
     """
 
-    def __init__(self, field: BodyField, group: str):
+    def __init__(self, field: BodyField, group: str, subfaces: bool = False):
         self.field = field
         self.face, self._facet_nodes = facet_nodes(field, field.mesh.groups[group][1])
         marks = np.ones((self._facet_nodes.size, field.gdim))
@@ -100,6 +105,9 @@ class SlaveNodes:
         self.local = owned  # local node indices in the slave body
         self.nodes = field.nodes[owned]  # system node indices
         self.X = field.X[owned]  # (n, gdim) reference coordinates
+        self._subfaces = subfaces and is_quadratic(self.face) and not field.axisymmetric
+        self.distribution = (SlaveDistribution(field, self.face, self._facet_nodes, self.nodes)
+                             if self._subfaces else None)
         #: (n,) the areas on the undeformed faces
         self.reference_area = self._areas(field.X)
         self.update_areas()
@@ -109,6 +117,8 @@ class SlaveNodes:
         f = self.field
         x = f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)]
         self.area = self._areas(x)
+        if self.distribution is not None:
+            self.distribution.update(x)
         #: nodal spacing: the side of the representative area (its length in 2D: the
         #: meridian length of an axisymmetric body's)
         if f.axisymmetric:
@@ -124,13 +134,12 @@ class SlaveNodes:
         f = self.field
         coords = x[self._facet_nodes]
         if f.axisymmetric and revolved:
-            shares = revolved_area_shares(self.face, coords)
+            area_shares = revolved_area_shares(self.face, coords)
         else:
             thickness = 1.0 if f.axisymmetric else out_of_plane(f.thickness, f.gdim)
-            areas = thickness * face_areas(self.face, coords)
-            shares = areas[:, None] * np.asarray(self.face.area_weights)[None, :]
+            area_shares = shares(self.face, coords, thickness, self._subfaces)
         share = np.zeros((self._facet_nodes.size, f.gdim))
-        share[:, 0] = shares.ravel()
+        share[:, 0] = area_shares.ravel()
         return f.to_owners(self._facet_nodes.ravel(), share)[self.local, 0]
 
 

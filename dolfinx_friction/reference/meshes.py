@@ -3,8 +3,10 @@ where all ranks see them (``comm``'s ranks wait for rank 0).
 
 Bodies are physical groups of cells, facet groups name the faces the scenes use; lengths
 are dimensionless.  Meridian sections of axisymmetric bodies (r = x >= 0, z = y):
-:func:`thick_cylinders`, :func:`sphere_section`, :func:`ring_section`.  The CalculiX comparisons' meshes: :func:`blocks_on_foundation`,
-:func:`ironing` (with their scenes in :mod:`dolfinx_friction.reference.cases`).
+:func:`thick_cylinders`, :func:`sphere_section`, :func:`ring_section`.  The CalculiX
+comparisons' meshes: :func:`blocks_on_foundation`, :func:`ironing` (with their scenes in
+:mod:`dolfinx_friction.reference.cases`); Hertz contact on a rigid plane:
+:func:`quarter_disk`, :func:`quarter_sphere`.
 """
 from __future__ import annotations
 
@@ -86,8 +88,9 @@ def block_3d(path: Path, n: tuple[int, int, int] = (4, 4, 2), tets: bool = False
 
 
 def two_boxes(path: Path, n_block: tuple[int, int, int] = (4, 4, 2),
-              n_foundation: tuple[int, int, int] = (5, 5, 2)) -> Path:
-    """Block [0.25,0.75]^2 x [0.5,0.75] on foundation [0,1]^2 x [0,0.5] (separate volumes).
+              n_foundation: tuple[int, int, int] = (5, 5, 2), tets: bool = False) -> Path:
+    """Block [0.25,0.75]^2 x [0.5,0.75] on foundation [0,1]^2 x [0,0.5] (separate volumes;
+    structured hexahedra, or with ``tets`` tetrahedra).
 
     Groups: bodies ``block``, ``foundation``; facets ``block_bottom``, ``block_top``,
     ``foundation_top``, ``foundation_bottom``.
@@ -95,7 +98,7 @@ def two_boxes(path: Path, n_block: tuple[int, int, int] = (4, 4, 2),
     def build():
         f = box(0, 0, 0, 1, 1, 0.5)
         b = box(0.25, 0.25, 0.5, 0.5, 0.5, 0.25)
-        mesh_boxes([(f, n_foundation), (b, n_block)])
+        mesh_boxes([(f, n_foundation), (b, n_block)], tets)
         group(3, [f], "foundation")
         group(3, [b], "block")
         group(2, boundary(3, f, 2, 0.0), "foundation_bottom")
@@ -370,3 +373,121 @@ def ironing(path: Path, length: float = 10.0, height: float = 5.0, radius: float
     finally:
         gmsh.finalize()
     return path
+
+
+def _graded(h_contact: float, h_far: float, refine_radius: float, growth: float) -> None:
+    """Element size ``h_contact`` within ``refine_radius`` of the origin, growing linearly
+    (slope ``growth``) up to ``h_far``."""
+    field = gmsh.model.mesh.field
+    fid = field.add("MathEval")
+    field.setString(fid, "F", f"Min({h_far}, {h_contact} + {growth} * "
+                              f"Max(0, Sqrt(x*x + y*y + z*z) - {refine_radius}))")
+    field.setAsBackgroundMesh(fid)
+    for key in ("Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+                "Mesh.MeshSizeFromCurvature"):
+        gmsh.option.setNumber(key, 0)
+
+
+def quarter_disk(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: float = 2.0,
+                 refine_radius: float = 1.0, growth: float = 0.25, order: int = 1,
+                 comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Quarter disk ``x >= 0``, centre ``(0, R)``, touching ``y = 0`` at the origin;
+    quadrilaterals graded from the origin (:func:`quarter_sphere`'s sizes), of geometric
+    ``order`` 1 or 2 (2: mid-side nodes on the arc).  Groups: body ``cylinder``; edges
+    ``cylinder_surface`` (the arc), ``cylinder_top`` (``y = R``), ``cylinder_symmetry``
+    (``x = 0``) -- as ``demos/hertz_cylinder.py``'s."""
+    def build():
+        geo = gmsh.model.geo
+        c, p0, p1 = geo.addPoint(0, R, 0), geo.addPoint(0, 0, 0), geo.addPoint(R, R, 0)
+        arc, top, sym = geo.addCircleArc(p0, c, p1), geo.addLine(p1, c), geo.addLine(c, p0)
+        disk = geo.addPlaneSurface([geo.addCurveLoop([arc, top, sym])])
+        geo.synchronize()
+        _graded(h_contact, h_far, refine_radius, growth)
+        for key, value in (("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
+                           ("Mesh.RecombinationAlgorithm", 1)):
+            gmsh.option.setNumber(key, value)
+        gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.setOrder(order)
+        for dim, tags, name in ((2, [disk], "cylinder"), (1, [arc], "cylinder_surface"),
+                                (1, [top], "cylinder_top"), (1, [sym], "cylinder_symmetry")):
+            group(dim, tags, name)
+    return write_model(build, path, comm)
+
+
+def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: float = 2.0,
+                   refine_radius: float = 1.0, growth: float = 0.25, order: int = 1,
+                   comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Quarter of the lower hemisphere ``x, y >= 0``, centre ``(0, 0, R)``, touching
+    ``z = 0`` at the origin: tetrahedra of size ``h_contact`` within ``refine_radius`` of
+    the origin, growing linearly (slope ``growth``) up to ``h_far``, of geometric ``order``
+    1 or 2 (2: mid-edge nodes on the sphere).  Groups: body ``sphere``; facets
+    ``sphere_surface`` (the curved surface), ``sphere_top`` (``z = R``),
+    ``sphere_symmetry_x`` (``x = 0``), ``sphere_symmetry_y`` (``y = 0``) -- as
+    ``demos/hertz_sphere.py``'s."""
+    def build():
+        occ = gmsh.model.occ
+        vol = occ.addSphere(0, 0, R, R, angle1=-math.pi / 2, angle2=0.0, angle3=math.pi / 2)
+        occ.synchronize()
+        names: dict[str, list[int]] = {}
+        for _, s in gmsh.model.getBoundary([(3, vol)], oriented=False):
+            c = occ.getCenterOfMass(2, s)
+            name = ("sphere_top" if abs(c[2] - R) < 1e-6 * R else
+                    "sphere_symmetry_x" if abs(c[0]) < 1e-6 * R else
+                    "sphere_symmetry_y" if abs(c[1]) < 1e-6 * R else "sphere_surface")
+            names.setdefault(name, []).append(s)
+        _graded(h_contact, h_far, refine_radius, growth)
+        gmsh.option.setNumber("Mesh.Algorithm", 6)
+        gmsh.option.setNumber("Mesh.Algorithm3D", 10)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(order)
+        group(3, [vol], "sphere")
+        for name, tags in names.items():
+            group(2, tags, name)
+    return write_model(build, path, comm)
+
+
+def stacked(path: Path, n_lower: int, n_upper: int, dim: int = 2, tets: bool = False,
+            order: int = 1, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Two blocks of the same footprint ``[0,1]^(dim-1)`` stacked on a flat interface
+    (the contact patch test): ``lower`` (height 0.5) and ``upper`` (0.5 to 1), structured
+    (``n_lower``, ``n_upper`` cells along each side of the interface, half as many across
+    each block's height, at least 2), quadrilaterals/hexahedra or with ``tets`` triangles/
+    tetrahedra, of geometric ``order`` 1 or 2.  Groups: ``lower``, ``upper``; facets
+    ``<body>_bottom``, ``<body>_top``, ``<body>_x0`` (``x = 0``) and in 3D ``<body>_y0``
+    (``y = 0``)."""
+    def build():
+        occ = gmsh.model.occ
+        bodies = {}
+        for name, z0, n in (("lower", 0.0, n_lower), ("upper", 0.5, n_upper)):
+            if dim == 2:
+                tag = occ.addRectangle(0, z0, 0, 1, 0.5)
+            else:
+                tag = occ.addBox(0, 0, z0, 1, 1, 0.5)
+            bodies[name] = (tag, n, z0)
+        occ.synchronize()
+        up = dim - 1  # the stacking axis
+        for name, (tag, n, z0) in bodies.items():
+            faces = gmsh.model.getBoundary([(dim, tag)], oriented=False)
+            edges = (faces if dim == 2 else
+                     gmsh.model.getBoundary(faces, combined=False, oriented=False))
+            for _, curve in edges:
+                a, b = gmsh.model.getBoundary([(1, abs(curve))], oriented=False)
+                pa, pb = gmsh.model.getValue(0, a[1], []), gmsh.model.getValue(0, b[1], [])
+                across = abs(pa[up] - pb[up]) > 1e-9
+                gmsh.model.mesh.setTransfiniteCurve(abs(curve),
+                                                    (max(n // 2, 2) if across else n) + 1)
+            for _, s in (faces if dim == 3 else [(2, tag)]):
+                gmsh.model.mesh.setTransfiniteSurface(s)
+                if not tets:
+                    gmsh.model.mesh.setRecombine(2, s)
+            if dim == 3:
+                gmsh.model.mesh.setTransfiniteVolume(tag)
+            group(dim, [tag], name)
+            group(dim - 1, boundary(dim, tag, up, z0), f"{name}_bottom")
+            group(dim - 1, boundary(dim, tag, up, z0 + 0.5), f"{name}_top")
+            group(dim - 1, boundary(dim, tag, 0, 0.0), f"{name}_x0")
+            if dim == 3:
+                group(dim - 1, boundary(dim, tag, 1, 0.0), f"{name}_y0")
+        gmsh.model.mesh.generate(dim)
+        gmsh.model.mesh.setOrder(order)
+    return write_model(build, path, comm)

@@ -85,27 +85,45 @@ def test_fill_over_writes_a_block_over_a_kept_base(comm):
         assert np.array_equal(_csr_rows(A, N), _csr_rows(expected, N))  # the same sums
 
 
-def _boxes_scene(mesh, model: str = "linear", **contact) -> Scene:
+def _boxes_scene(mesh, model: str = "linear", degree: int | None = None,
+                 master: str = "foundation", **contact) -> Scene:
+    """The block pressed on the foundation and slid; ``master = "plane"``: on a rigid plane
+    where the foundation's top is (the foundation left out)."""
     # CalculiX's K and lambda: with the default lambda = E/h a slave node's trial force
     # lies within the finite-difference step of the Coulomb cone (1e-2 at h = 1e-7, 2e-9
     # at 1e-8): a kink, not a tangent error
     contact = {"K": "calculix", "stick_slope": "calculix", **contact}
+    if master == "plane":
+        return Scene(
+            mesh=mesh, bodies=(Body("block", 1000.0, 0.3, model=model, degree=degree),),
+            rigids=(Rigid("floor", "plane", point=(0.0, 0.0, 0.5), normal=(0.0, 0.0, 1.0)),),
+            contacts=(ContactPair("block_bottom", "floor", **contact),),
+            steps=(Step("press", bcs=(BC("block_top", (0.0, 0.0, -0.01)),)),
+                   Step("slide", increments=3, bcs=(BC("block_top", (0.04, 0.01, -0.01)),))))
     return Scene(
-        mesh=mesh, bodies=(Body("block", 1000.0, 0.3, model=model),
-                           Body("foundation", 2000.0, 0.25, model=model)),
+        mesh=mesh, bodies=(Body("block", 1000.0, 0.3, model=model, degree=degree),
+                           Body("foundation", 2000.0, 0.25, model=model, degree=degree)),
         contacts=(ContactPair("block_bottom", "foundation_top", **contact),),
         steps=(Step("press", bcs=(BC("foundation_bottom", (0.0, 0.0, 0.0)),
                                   BC("block_top", (0.0, 0.0, -0.01)))),
                Step("slide", increments=3, bcs=(BC("block_top", (0.04, 0.01, -0.01)),))))
 
 
-@pytest.mark.parametrize("mu, model", [(0.0, "linear"), (0.3, "linear"),
-                                       (0.3, "neo-hookean"), (0.3, "saint-venant-kirchhoff")])
-def test_global_jacobian_matches_finite_differences(shared_dir, mu, model):
+@pytest.mark.parametrize("mu, model, degree, cells, master", [
+    (0.0, "linear", None, "hex", "foundation"), (0.3, "linear", None, "hex", "foundation"),
+    (0.3, "neo-hookean", None, "hex", "foundation"),
+    (0.3, "saint-venant-kirchhoff", None, "hex", "foundation"),
+    (0.3, "neo-hookean", 2, "hex", "foundation"), (0.3, "neo-hookean", 2, "tet", "foundation"),
+    (0.3, "neo-hookean", 2, "hex", "plane"), (0.3, "neo-hookean", 2, "tet", "plane"),
+    (0.0, "linear", 2, "tet", "plane")])
+def test_global_jacobian_matches_finite_differences(shared_dir, mu, model, degree, cells,
+                                                    master):
     """The assembled Jacobian (bulk + contact, pairing frozen) is the derivative of the
-    residual, through the system's public calls; also with finite-strain bodies."""
-    mesh = meshes.two_boxes(shared_dir / "boxes.msh")
-    problem = ContactProblem(_boxes_scene(mesh, model, mu=mu))
+    residual, through the system's public calls; also with finite-strain bodies, and with
+    quadratic slave faces (Q9, T6), which on a rigid plane spread each slave node's force
+    over the faces around it (across ranks under MPI)."""
+    mesh = meshes.two_boxes(shared_dir / "boxes.msh", tets=cells == "tet")
+    problem = ContactProblem(_boxes_scene(mesh, model, degree, master, mu=mu))
     Solver(problem).run()
     system = problem.system
     system.prescribe(np.zeros(0, dtype=np.int64), np.zeros(0))  # no constrained rows
@@ -123,7 +141,11 @@ def test_global_jacobian_matches_finite_differences(shared_dir, mu, model):
     v.setArray(rng.standard_normal(v.getLocalSize()))
     Jv = v.duplicate()
     J.mult(v, Jv)
-    h = 1e-7
+    # P2, mu = 0.3: some slave node's trial force lies within a step of 1e-7 (tet on the
+    # plane: 1e-8) of the Coulomb cone, a kink: error 1e-3 at h = 1e-7 on the foundation,
+    # 6e-4 at 1e-8 on the plane (all of it in one node's rows), 3e-10 and 8e-9 at 1e-9; at
+    # that step round-off limits the check to ~1e-8
+    h, tol = (1e-9, 1e-7) if degree == 2 else (1e-7, 1e-8)
     residuals = []
     for sign in (1.0, -2.0):
         x.axpy(sign * h, v)
@@ -133,8 +155,9 @@ def test_global_jacobian_matches_finite_differences(shared_dir, mu, model):
         residuals.append(system.b.copy())
     fd = (residuals[0] - residuals[1]) / (2 * h)
     error = (fd - Jv).norm() / Jv.norm()
-    print(f"\n{model}, mu = {mu}: FD rel error {error:.1e}")
-    assert error < 1e-8, error  # measured 1.8e-10 (mu = 0.3)
+    print(f"\n{model}, {cells} P{degree or 1} on the {master}, mu = {mu}: FD rel error "
+          f"{error:.1e}")
+    assert error < tol, error  # measured 1.8e-10 (mu = 0.3); P2 at h = 1e-9: < 1e-8
 
 
 def test_rigid_body_modes_span_the_kernel_of_the_bulk_stiffness(shared_dir):
@@ -380,11 +403,13 @@ def test_master_normals_point_out_of_the_body(shared_dir):
     assert problem.comm.allreduce(face_areas(faces.face, faces.X).sum()) == pytest.approx(1.0)
 
 
-def test_parallel_run_matches_serial_run(shared_dir, comm):
+@pytest.mark.parametrize("degree, master", [(None, "foundation"), (2, "plane")])
+def test_parallel_run_matches_serial_run(shared_dir, comm, degree, master):
     """The same scene on all ranks and on one rank: reactions agree to 1e-8 relative,
-    and under MPI some slave nodes pair with master faces owned by another rank."""
+    and under MPI some slave nodes pair with master faces owned by another rank (P2 on a
+    plane: slave nodes spread their forces over slave faces of another rank)."""
     mesh = meshes.two_boxes(shared_dir / "boxes.msh", n_block=(5, 5, 2), n_foundation=(7, 7, 2))
-    scene = _boxes_scene(mesh, mu=0.3)
+    scene = _boxes_scene(mesh, degree=degree, master=master, mu=0.3)
     parallel = run(scene, write=False, comm=comm)
     serial = run(scene, write=False, comm=MPI.COMM_SELF)
     for a, b in zip(parallel.increments, serial.increments):
@@ -394,8 +419,10 @@ def test_parallel_run_matches_serial_run(shared_dir, comm):
         assert (a.active, a.slipping) == (b.active, b.slipping)
     pair = next(iter(parallel.problem.pairs.values()))
     start, end = parallel.problem.u.getOwnershipRange()
-    _, cols = pair.couplings()  # slave rows are owned; master columns may be remote
-    crossing = comm.allreduce(int(((cols < start) | (cols >= end)).sum()))
+    # master columns may be remote; so may the rows of a spread slave force (P2, plane)
+    rows, cols = pair.couplings()
+    remote = np.concatenate([rows, cols])
+    crossing = comm.allreduce(int(((remote < start) | (remote >= end)).sum()))
     if comm.size > 1:
         assert crossing > 0
     else:

@@ -1,0 +1,84 @@
+"""Contact pressures on quadratic (P2) slave faces against Hertz, pointwise (issue #26).
+
+A quarter disk (2D, 3-node edges) and a quarter of a lower hemisphere (3D, T6 faces),
+R = 10, E = 1000, nu = 0.3, of second-order geometry (mid-side nodes on the circle or
+sphere; theory §2.1 explains why not first-order), pressed onto a rigid plane in one
+increment, frictionless, every contact setting at its default.  The nodal pressures
+``F_N / A_k`` of every slave node within 0.8 a are compared with Hertz's profile for the
+measured load.  Each bound is the issue's target; the measured values (serial, this mesh)
+are in the tests' docstrings.  Coarser meshes than the demos' (2D: a/h = 18; 3D:
+a/h = 8, 190 nodes within 0.8 a) keep the tests short.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dolfinx_friction.reference import meshes
+from dolfinx_friction.reference.analytic import effective_modulus, hertz_line, hertz_sphere
+from dolfinx_friction.reference.compare import contact_state
+from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Rigid, Scene, Step
+from dolfinx_friction.scene.runner import PENETRATION_WARNING, run
+
+E, NU, R = 1000.0, 0.3, 10.0
+
+
+def _pressed(mesh, dim: int, depth: float):
+    """Run the body of ``mesh`` with P2 onto the rigid plane; the deviations of the nodal
+    pressures within 0.8 a from Hertz (relative to p0) ordered by the distance r from the
+    axis, r, and the largest overclosure relative to the slave spacing."""
+    if dim == 2:
+        body, surface, top, bcs = "cylinder", "cylinder_surface", "cylinder_top", (
+            BC("cylinder_symmetry", (0.0, None)), BC("cylinder_top", (0.0, -depth)))
+        floor = Rigid("floor", "plane", point=(0.0, 0.0), normal=(0.0, 1.0))
+    else:
+        body, surface, top, bcs = "sphere", "sphere_surface", "sphere_top", (
+            BC("sphere_symmetry_x", (0.0, None, None)), BC("sphere_symmetry_y", (None, 0.0, None)),
+            BC("sphere_top", (0.0, 0.0, -depth)))
+        floor = Rigid("floor", "plane", point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0))
+    scene = Scene(mesh=mesh, bodies=(Body(body, E, NU, degree=2),), rigids=(floor,),
+                  contacts=(ContactPair(surface, "floor"),),
+                  steps=(Step("press", bcs=bcs),),
+                  output=Output(fields=False, contact_table=False, reactions=(top,)))
+    result = run(scene, write=False)
+    F = abs(result.increments[-1].reactions[top][dim - 1])
+    st = contact_state(result)
+    if dim == 2:
+        a, p0 = hertz_line(2.0 * F, R, effective_modulus(E, NU))
+        r = np.abs(st["X"][:, 0])
+    else:
+        a, p0, _ = hertz_sphere(4.0 * F, R, effective_modulus(E, NU))
+        r = np.linalg.norm(st["X"][:, :2], axis=1)
+    inner = np.flatnonzero(r < 0.8 * a)
+    inner = inner[np.argsort(r[inner])]
+    hertz = p0 * np.sqrt(1.0 - (r[inner] / a) ** 2)
+    penetration = max(max(i.penetration.values()) for i in result.increments)
+    return (st["pressure"][inner] - hertz) / p0, r[inner], penetration
+
+
+def test_hertz_cylinder_p2_without_zigzag(shared_dir):
+    """3-node edges: every node within 0.8 a within 0.2 % of p0 (measured 0.06 %, centre
+    -0.008 %; CalculiX's 1/6, 2/3, 1/6 weights: 0.10 %), and no vertex/mid-side zig-zag:
+    the largest second difference of the nodal pressures minus Hertz below 0.2 % of p0
+    (measured 0.065 %; CalculiX's weights 0.16 %); overclosure 0.5 % of the spacing."""
+    mesh = meshes.quarter_disk(shared_dir / "disk.msh", R=R, h_contact=0.025,
+                               refine_radius=1.0, order=2)
+    deviation, r, penetration = _pressed(mesh, 2, depth=0.04)
+    assert len(r) >= 25 and r[0] == pytest.approx(0.0, abs=1e-12)
+    assert np.abs(deviation).max() < 2e-3
+    assert np.abs(np.diff(deviation, 2)).max() < 2e-3
+    assert penetration < PENETRATION_WARNING
+
+
+def test_hertz_sphere_p2_pointwise(shared_dir):
+    """T6 faces: centre node within 2 % of p0 (measured -0.8 %; CalculiX's 1/999 weights
+    on the same mesh: -8.2 %), every node within 0.8 a within 5 % (measured 3.1 %;
+    CalculiX's weights 11.2 %), no overclosure warning (measured 2.3 % of the slave
+    spacing; CalculiX's weights 15.5 %)."""
+    mesh = meshes.quarter_sphere(shared_dir / "sphere.msh", R=R, h_contact=0.15,
+                                 refine_radius=1.5, order=2)
+    deviation, r, penetration = _pressed(mesh, 3, depth=0.15)
+    assert len(r) >= 150 and r[0] == pytest.approx(0.0, abs=1e-12)
+    assert abs(deviation[0]) < 0.02
+    assert np.abs(deviation).max() < 0.05
+    assert penetration < PENETRATION_WARNING
