@@ -7,6 +7,10 @@ sphere or a cylinder: away from the axis).  :func:`rigid_plane`, :func:`rigid_sp
 :func:`rigid_cylinder` check what they are given (:class:`~dolfinx_friction.errors.
 ContactSetupError`) and make unit directions; the scene builds its ``[[rigid]]`` obstacles
 as they are (:meth:`Obstacle.like`).
+
+An obstacle moves rigidly: its current geometry is its reference shape rotated by ``Q``
+about its ``reference`` point ``c`` (default: the shape's ``point`` or ``center``), then
+translated by ``t``: ``x = Q (X - c) + c + t`` (:func:`rotation_matrix`, :meth:`Obstacle.moved`).
 """
 from __future__ import annotations
 
@@ -18,7 +22,8 @@ from dolfinx_friction import rules as r
 from dolfinx_friction.errors import ContactSetupError
 from dolfinx_friction.rules import Key, Rules, fail, join, validate
 
-__all__ = ["SHAPES", "Obstacle", "rigid_cylinder", "rigid_plane", "rigid_sphere"]
+__all__ = ["SHAPES", "Obstacle", "rigid_cylinder", "rigid_plane", "rigid_sphere",
+           "rotation_matrix", "rotation_size"]
 
 SHAPES = ("plane", "sphere", "cylinder")
 Vector = tuple[float, ...]
@@ -26,8 +31,10 @@ Vector = tuple[float, ...]
 
 @dataclass(frozen=True)
 class Obstacle:
-    """An analytic rigid obstacle in its reference position (its translation is the
-    contact's, :attr:`~dolfinx_friction.NodeToSurface.obstacle_translation`)."""
+    """An analytic rigid obstacle in its reference position (its translation and rotation
+    are the contact's, :attr:`~dolfinx_friction.NodeToSurface.obstacle_translation` and
+    :attr:`~dolfinx_friction.NodeToSurface.obstacle_rotation`); ``reference`` is the point
+    it rotates about (default: :attr:`pivot`)."""
 
     name: str
     shape: str  # one of SHAPES
@@ -36,6 +43,7 @@ class Obstacle:
     center: Vector | None = None
     axis: Vector | None = None
     radius: float | None = None
+    reference: Vector | None = None
 
     def __post_init__(self) -> None:
         validate(self, RULES)
@@ -44,7 +52,52 @@ class Obstacle:
     def like(cls, rigid: Any) -> Obstacle:
         """The obstacle of any object with the same attributes (a scene ``Rigid``)."""
         return cls(rigid.name, rigid.shape, point=rigid.point, normal=rigid.normal,
-                   center=rigid.center, axis=rigid.axis, radius=rigid.radius)
+                   center=rigid.center, axis=rigid.axis, radius=rigid.radius,
+                   reference=rigid.reference)
+
+    @property
+    def pivot(self) -> Vector:
+        """The point the obstacle rotates about: ``reference``, else the shape's ``point``
+        (plane, cylinder) or ``center`` (sphere)."""
+        if self.reference is not None:
+            return self.reference
+        return self.center if self.shape == "sphere" else self.point
+
+    def moved(self, Q) -> dict:
+        """The shape's parameters rotated by ``Q`` (gdim, gdim) about :attr:`pivot` (the
+        translation is applied by the element): ``point``, ``normal``, ``center``, ``axis``,
+        ``radius`` as :func:`~dolfinx_friction.contact.element.rigid_kinematics` takes them."""
+        import numpy as np
+        c = np.asarray(self.pivot, float)
+        out: dict = {"radius": self.radius or 0.0}
+        for key in ("point", "center"):
+            v = getattr(self, key)
+            out[key] = None if v is None else Q @ (np.asarray(v, float) - c) + c
+        for key in ("normal", "axis"):
+            v = getattr(self, key)
+            out[key] = None if v is None else Q @ np.asarray(v, float)
+        return out
+
+
+def rotation_size(gdim: int) -> int:
+    """Components of a rotation: 1 in 2D (an angle), 3 in 3D (a rotation vector)."""
+    return 1 if gdim == 2 else 3
+
+
+def rotation_matrix(rotation, gdim: int):
+    """(gdim, gdim) rotation matrix of ``rotation`` [rad]: in 2D an angle (a number or one
+    component), counter-clockwise; in 3D a rotation vector (axis times angle, Rodrigues)."""
+    import numpy as np
+    theta = np.atleast_1d(np.asarray(rotation, dtype=float))
+    if gdim == 2:
+        c, s = np.cos(theta[0]), np.sin(theta[0])
+        return np.array([[c, -s], [s, c]])
+    angle = float(np.linalg.norm(theta))
+    if angle == 0.0:
+        return np.eye(3)
+    k = theta / angle
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
 
 
 def _vector(values, what: str) -> tuple[float, ...]:
@@ -66,28 +119,39 @@ def _direction(values, what: str) -> tuple[float, ...]:
     return tuple(float(c) for c in v / np.linalg.norm(v))
 
 
+def _reference(reference: Sequence[float] | None, what: str) -> tuple[float, ...] | None:
+    return None if reference is None else _vector(reference, f"{what} reference")
+
+
 def rigid_plane(point: Sequence[float], normal: Sequence[float],
-                name: str = "plane") -> Obstacle:
-    """A rigid plane through ``point``; ``normal`` points towards the deformable body."""
+                name: str = "plane", reference: Sequence[float] | None = None) -> Obstacle:
+    """A rigid plane through ``point``; ``normal`` points towards the deformable body;
+    it rotates about ``reference`` (default: ``point``)."""
     return Obstacle(name, "plane", point=_vector(point, "rigid plane point"),
-                    normal=_direction(normal, "rigid plane normal"))
+                    normal=_direction(normal, "rigid plane normal"),
+                    reference=_reference(reference, "rigid plane"))
 
 
-def rigid_sphere(center: Sequence[float], radius: float, name: str = "sphere") -> Obstacle:
-    """A rigid sphere (a circle in 2D); the body touches it from outside."""
+def rigid_sphere(center: Sequence[float], radius: float, name: str = "sphere",
+                 reference: Sequence[float] | None = None) -> Obstacle:
+    """A rigid sphere (a circle in 2D); the body touches it from outside; it rotates about
+    ``reference`` (default: ``center``)."""
     if not float(radius) > 0.0:
         raise ContactSetupError(f"rigid sphere radius must be positive, got {radius}")
     return Obstacle(name, "sphere", center=_vector(center, "rigid sphere center"),
-                    radius=float(radius))
+                    radius=float(radius), reference=_reference(reference, "rigid sphere"))
 
 
 def rigid_cylinder(point: Sequence[float], axis: Sequence[float], radius: float,
-                   name: str = "cylinder") -> Obstacle:
-    """A rigid circular cylinder (3D) through ``point`` along ``axis``."""
+                   name: str = "cylinder", reference: Sequence[float] | None = None
+                   ) -> Obstacle:
+    """A rigid circular cylinder (3D) through ``point`` along ``axis``; it rotates about
+    ``reference`` (default: ``point``)."""
     if not float(radius) > 0.0:
         raise ContactSetupError(f"rigid cylinder radius must be positive, got {radius}")
     return Obstacle(name, "cylinder", point=_vector(point, "rigid cylinder point"),
-                    axis=_direction(axis, "rigid cylinder axis"), radius=float(radius))
+                    axis=_direction(axis, "rigid cylinder axis"), radius=float(radius),
+                    reference=_reference(reference, "rigid cylinder"))
 
 
 SHAPE_KEYS = {"plane": ("point", "normal"), "sphere": ("center", "radius"),
@@ -116,5 +180,6 @@ KEYS: dict[str, Key] = {
     "center": Key(r.vector()),
     "axis": Key(r.vector(nonzero=True)),
     "radius": Key(r.number(gt=0)),
+    "reference": Key(r.vector()),
 }
 RULES = Rules("rigid", KEYS, (check_shape,))

@@ -16,8 +16,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction import (NO_ELEMENT, BlockProblem, ContactSetupError, Newton, NodeToSurface,
-                              SNESNewton, Surface, create_matrix, rigid_plane, snes_solve,
-                              solve_steps)
+                              SNESNewton, Surface, create_matrix, rigid_cylinder, rigid_plane,
+                              rigid_sphere, snes_solve, solve_steps)
 from dolfinx_friction import _compat as compat
 
 E, NU = 1000.0, 0.3
@@ -154,6 +154,66 @@ def test_jacobian_two_bodies_matches_central_differences():
     err = fd_error(problem, contact)
     print(f"\nNeo-Hookean block on a Neo-Hookean foundation, mu = 0.3: FD rel error {err:.2e}, "
           f"statuses {sorted(statuses(contact))}")
+    assert {1, 2} <= statuses(contact)
+    assert err < 1e-7
+
+
+def on_turning_obstacle(d: int, obstacle, mu=0.3):
+    """A linear-elastic block (2D: 1 x 0.5, 3D: 1 x 1 x 0.5) held at its top, its bottom the
+    slave of a rigid ``obstacle`` below it."""
+    if d == 3:
+        m = mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [1, 1, 0.5]], [6, 6, 3],
+                            mesh.CellType.hexahedron)
+        facets = [mesh.locate_entities_boundary(m, 2, lambda x, z=z: np.isclose(x[2], z))
+                  for z in (0.0, 0.5)]
+        order = np.argsort(np.concatenate(facets))
+        tags = mesh.meshtags(m, 2, np.concatenate(facets)[order].astype(np.int32),
+                             np.concatenate([np.full(len(f), t, np.int32) for f, t
+                                             in zip(facets, (BOTTOM, TOP))])[order])
+        V, h = compat.vector_space(m, 1), 1 / 6
+    else:
+        (V, tags), h = block(0.0, 0.0, 1.0, 0.5, 16, 8), 1 / 16
+    u, v = fem.Function(V), ufl.TestFunction(V)
+    lam, G = E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU))
+    eps = ufl.sym(ufl.grad(u))
+    F = ufl.inner(2 * G * eps + lam * ufl.tr(eps) * ufl.Identity(d), ufl.grad(v)) * ufl.dx
+    held = fem.dirichletbc(np.zeros(d), fem.locate_dofs_topological(V, d - 1, tags.find(TOP)), V)
+    contact = NodeToSurface(Surface(V, tags, BOTTOM), obstacle, E=E, K=100 * E / h,
+                            stick_slope=10 * E / h, mu=mu)
+    return BlockProblem([F], [u], [held], [contact]), contact
+
+
+#: obstacles below the block that turn while they press it: (dimension, obstacle, pressing
+#: translation, final translation, rotation); stick and slip nodes both
+TURNING = {
+    "circle": (2, rigid_sphere([0.5, -1.0], 1.0), (0.0, 0.02), (0.02, 0.02), 0.05),
+    "circle-backwards": (2, rigid_sphere([0.5, -1.0], 1.0), (0.0, 0.02), (0.02, 0.02), -0.02),
+    "plane-about-a-point": (2, rigid_plane([0.0, 0.0], [0.0, 1.0], reference=[0.5, -0.5]),
+                            (0.0, 0.02), (0.01, 0.02), 0.005),
+    "sphere": (3, rigid_sphere([0.5, 0.5, -1.0], 1.0), (0.0, 0.0, 0.03), (0.01, 0.0, 0.03),
+               (0.01, 0.02, 0.03)),
+    "cylinder": (3, rigid_cylinder([0.5, 0.5, -1.0], [0.0, 1.0, 0.0], 1.0),
+                 (0.0, 0.0, 0.02), (0.01, 0.0, 0.02), (0.0, -0.01, 0.02)),
+}
+
+
+@pytest.mark.parametrize("case", list(TURNING))
+def test_jacobian_on_a_turning_obstacle_matches_central_differences(case):
+    """The slip against a rotating obstacle follows its material points: a constant of the
+    increment, so the tangent stays exact (the FD check of the translating plane)."""
+    d, obstacle, press_to, end, rotation = TURNING[case]
+    problem, contact = on_turning_obstacle(d, obstacle)
+
+    def press(t):
+        contact.obstacle_translation = np.multiply(t, press_to)
+
+    def turn(t):
+        contact.obstacle_translation = np.add(press_to, np.multiply(t, np.subtract(end, press_to)))
+        contact.obstacle_rotation = np.multiply(t, rotation)
+    solve_steps(problem, press, 2)
+    solve_steps(problem, turn, 2)
+    err = fd_error(problem, contact)
+    print(f"\n{case}: FD rel error {err:.2e}, statuses {sorted(statuses(contact))}")
     assert {1, 2} <= statuses(contact)
     assert err < 1e-7
 
