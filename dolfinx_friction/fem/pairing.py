@@ -406,8 +406,11 @@ class ContactInteraction:
             history.g_p[new] = 0.0
             if self.rigid and self.master.rotating:
                 # the obstacle's material point under a node moved with its rotation too:
-                # s = w - (w_n + offset) (w = u_p - U holds the translation only)
-                old = np.flatnonzero(self.in_contact[s])
+                # s = w - (w_n + offset) (w = u_p - U holds the translation only).  A node
+                # touching anew measures from the obstacle's translation its w_n holds: the
+                # start's (an unknown translation), or the current one (prescribed), so with
+                # the start's rotation or with the current one (no offset)
+                old = np.flatnonzero(self.in_contact[s] | (self.master.node is not None))
                 U_n = self.master.translation_n if self.master.node is None else u_m[0]
                 history.w[old] += self.master.slip_offset(self.slaves.X[s[old]], u_s[s[old]],
                                                           U_n)

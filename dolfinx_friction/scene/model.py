@@ -63,6 +63,7 @@ class Rigid:
     plane: ``point``, ``normal``; sphere (circle in 2D): ``center``, ``radius``;
     cylinder (3D): ``point``, ``axis``, ``radius``.  The outward normal points
     towards the deformable body (for a sphere/cylinder: away from the axis).
+    ``reference``: the point it rotates about (default: its ``point`` or ``center``).
     """
 
     name: str
@@ -72,6 +73,7 @@ class Rigid:
     center: Optional[Vector] = None
     axis: Optional[Vector] = None
     radius: Optional[float] = None
+    reference: Optional[Vector] = None
 
     def __post_init__(self) -> None:
         validate(self, RULES[Rigid])
@@ -139,11 +141,14 @@ class Load:
 
 @dataclass(frozen=True)
 class RigidMotion:
-    """Rigid obstacle driven by a total translation or a total force at the end of the step."""
+    """Rigid obstacle driven by a total translation or a total force at the end of the step,
+    and optionally turned to a total ``rotation`` about its reference point [rad]: an angle
+    ``(theta,)`` in 2D (counter-clockwise), a rotation vector ``(tx, ty, tz)`` in 3D."""
 
     name: str
     displacement: Optional[Vector] = None
     force: Optional[Vector] = None
+    rotation: Optional[Vector] = None
 
     def __post_init__(self) -> None:
         validate(self, RULES[RigidMotion])
@@ -240,6 +245,7 @@ RULES: dict[type, Rules] = {
         "name": Key(v.name, required=True),
         "displacement": Key(v.vector()),
         "force": Key(v.vector()),
+        "rotation": Key(v.rotation),
     }, (v.exactly_one("displacement", "force"),)),
     Step: Rules("step", {
         "name": Key(v.name),  # a scene file may leave it out: "step-<index>"

@@ -1,0 +1,99 @@
+"""A rigid wheel (a circle, radius R) pressed into a thick, nearly incompressible elastic layer
+(plane strain, nu = 0.49, P2) and moved along it by d: rolling freely (rotation theta = -d/R,
+clockwise while it moves towards +x, so the material point of the wheel at the contact stands
+still) it carries almost no tangential force; with its rotation locked (theta = 0) it slides,
+every contact node slips, and it carries mu times the normal force.  Its moment about its
+centre is the friction force times R.
+
+The layer is the uncoupled configuration of rolling contact: a half-space (thickness 1 against
+a contact half-width of about 0.04) of a nearly incompressible material, whose Dundurs
+constant against a rigid body, beta = (1 - 2 nu) / (2 (1 - nu)) = 0.02, nearly vanishes, so
+normal pressure moves no surface point tangentially.  (With nu = 0.3, beta = 0.29, the same
+free rolling carries F_t / F_n = 0.15: the compressed surface under the wheel creeps.)
+Serial and under ``mpirun -n 2``.
+"""
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+from dolfinx_friction.reference import meshes
+from dolfinx_friction.reference.compare import contact_state
+from dolfinx_friction.scene.model import (BC, Body, ContactPair, Output, Rigid, RigidMotion,
+                                          Scene, Step)
+from dolfinx_friction.scene.runner import run
+
+E, NU, MU, R = 1000.0, 0.49, 0.3, 1.0
+X0, DEPTH = 1.0, 0.003  # the wheel's first centre (x: the layer's middle), how far it is pressed
+
+
+def wheel_scene(mesh, d: float, theta: float, increments: int, out=None) -> Scene:
+    """The wheel pressed in (2 increments), then moved by ``d`` along x while it turns by
+    ``theta`` (radians, counter-clockwise)."""
+    return Scene(
+        mesh=mesh, bodies=(Body("block", E, NU, degree=2),),
+        rigids=(Rigid("wheel", "sphere", center=(X0, R), radius=R),),
+        contacts=(ContactPair("top", "wheel", mu=MU),),
+        steps=(Step("press", increments=2, bcs=(BC("bottom", (0.0, 0.0)),),
+                    rigid=(RigidMotion("wheel", displacement=(0.0, -DEPTH)),)),
+               Step("roll", increments=increments,
+                    rigid=(RigidMotion("wheel", displacement=(d, -DEPTH), rotation=theta),))),
+        **({} if out is None else {"output": Output(dir=str(out), fields=False)}))
+
+
+def layer(directory, d: float):
+    return meshes.rolling_layer(directory / "layer.msh", track=(X0 - 0.25, X0 + d + 0.25),
+                                h_track=0.01)
+
+
+def test_free_rolling_carries_almost_no_tangential_force(shared_dir):
+    """Rolling freely over 0.3 (8 contact half-widths), F_t / F_n stays below 0.012 (3.8 %
+    of mu; it drifts as the layer, 2 wide, is sheared between the wheel and its bottom).  A
+    wheel turning 0.1 % faster (creep 1e-3) carries 5 times more: the slip follows the
+    wheel's rotation to much better than that."""
+    d, n = 0.3, 24
+    mesh = layer(shared_dir, d)
+    ratios = {}
+    for creep in (0.0, 1e-3):
+        result = run(wheel_scene(mesh, d, -(1 + creep) * d / R, n), write=False)
+        ratios[creep] = np.array([inc.rigid_f["wheel"][0] / -inc.rigid_f["wheel"][1]
+                                  for inc in result.increments])
+    free, faster = (np.abs(ratios[c]).max() for c in (0.0, 1e-3))
+    print(f"\nfree rolling: F_t/F_n after the press {ratios[0.0][1]:+.1e}, largest while "
+          f"rolling {free:.2e}, at the end {ratios[0.0][-1]:+.2e} (mu = {MU}); turning 0.1 % "
+          f"faster: largest {faster:.2e}")
+    assert free < 0.012  # measured 8.3e-3
+    assert faster > 4 * free
+
+
+def test_locked_wheel_slides_at_mu_with_moment_friction_times_radius(shared_dir):
+    d = 0.1
+    result = run(wheel_scene(layer(shared_dir, d), d, 0.0, 4, out=shared_dir / "out"))
+    last = result.increments[-1]
+    st = contact_state(result)
+    closed = st["status"] > 0
+    F_T, F_N = st["tangential_force"][closed], st["normal_force"][closed]
+    assert closed.sum() > 10 and (st["status"][closed] == 2).all()  # full slip
+    friction = np.linalg.norm(F_T, axis=1).sum()
+    assert friction == pytest.approx(MU * F_N.sum(), rel=1e-12)
+    F, M = last.rigid_f["wheel"], last.rigid_m["wheel"]
+    # the drive holds the wheel against the layer's friction (towards -x at its bottom): it
+    # pulls it forward (F_x > 0) and its moment about the centre is counter-clockwise,
+    # M_z = +R * friction (each contact force acts at R from the centre, its normal part
+    # through it)
+    print(f"\nlocked: sum|F_T| / (mu sum F_N) - 1 = {friction / (MU * F_N.sum()) - 1:.1e}; "
+          f"M_z / (R sum|F_T|) - 1 = {M[0] / (R * friction) - 1:.2e}; resultant F_x / -F_y "
+          f"= {F[0] / -F[1]:.6f}, M_z / (R F_x) - 1 = {M[0] / (R * F[0]) - 1:.2e}")
+    # to 1e-3 (measured 1.9e-4): a node's friction force keeps a small normal component, as
+    # its elastic tangential gap is not turned with its normal (docs/theory.md §10.12), which
+    # turns by d / (4 R) per increment under the sliding wheel
+    assert M[0] == pytest.approx(R * friction, rel=1e-3)
+    # the resultant: the normals tilt over the contact (measured +1.4e-3 and -5.7e-4)
+    assert F[0] / -F[1] == pytest.approx(MU, rel=5e-3)
+    assert M[0] == pytest.approx(R * F[0], rel=5e-3)
+    if result.problem.comm.rank == 0:
+        with open(shared_dir / "out" / "history.csv") as f:
+            row = list(csv.DictReader(f))[-1]
+        assert float(row["M_wheel_z"]) == pytest.approx(M[0], rel=1e-12)
