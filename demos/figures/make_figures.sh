@@ -28,3 +28,10 @@ df plot "$OUT/incline_sweep" -o "$FIG/incline_mu_sweep.png"
 df plot "$OUT/incline_sweep/contact.0.mu=0.3" -o "$FIG/incline_mu0.3_history.png"
 df render "$OUT/incline_sweep/contact.0.mu=0.3" --warp 5 --scalar status \
     -o "$FIG/incline_mu0.3_status.png"
+
+# a rigid wheel rolling freely, then driven with creep: forces and moment, the stick zone at
+# the leading edge of the contact
+df run demos/rolling_cylinder.toml --out "$OUT/rolling_cylinder" --quiet
+df plot "$OUT/rolling_cylinder" -o "$FIG/rolling_cylinder_history.png"
+df render "$OUT/rolling_cylinder" --scalar status --warp 20 \
+    -o "$FIG/rolling_cylinder_status.png"

@@ -261,11 +261,11 @@ def ironing(path: Path, length: float = 10.0, height: float = 5.0, radius: float
 
 def rolling_layer(path: Path, width: float = 2.0, depth: float = 1.0,
                   track: tuple[float, float] = (0.6, 1.4), h_track: float = 0.01,
-                  h_far: float = 0.2, order: int = 2) -> Path:
+                  h_far: float = 0.2, order: int = 2, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
     """Elastic layer [0, width] x [-depth, 0] for a rigid wheel rolling on its top: triangles
     of size ``h_track`` along the top edge over ``track`` (x from, to), growing to ``h_far``
     away from it; ``order`` 1 or 2.  Body ``block``, edges ``top``, ``bottom``, ``left``,
-    ``right``."""
+    ``right``.  Written by rank 0 of ``comm``."""
     def build():
         s = gmsh.model.occ.addRectangle(0, -depth, 0, width, depth)
         gmsh.model.occ.synchronize()
@@ -288,4 +288,4 @@ def rolling_layer(path: Path, width: float = 2.0, depth: float = 1.0,
         group(1, boundary(2, s, 1, -depth), "bottom")
         group(1, boundary(2, s, 0, 0.0), "left")
         group(1, boundary(2, s, 0, width), "right")
-    return write_model(build, path)
+    return write_model(build, path, comm)
