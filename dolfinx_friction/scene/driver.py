@@ -102,7 +102,6 @@ class Solver:
         self._bc_state: dict[str, tuple] = {}
         self._load_state: dict[str, tuple] = {}
         self._rigid_state: dict[str, tuple] = {}
-        self._rotation_state: dict[str, np.ndarray] = {}  # total rotation of each obstacle
         self._unit_loads: dict[str, list] = {}
         self._reaction_rows = {g: problem.owned_group_dofs(g) for g in self.reaction_groups()}
 
@@ -135,13 +134,10 @@ class Solver:
         self._bc_state.update({bc.on: bc.u for bc in step.bcs})
         self._load_state.update({ld.on: (ld.traction, ld.pressure) for ld in step.loads})
         self._rigid_state.update({r.name: (r.displacement, r.force) for r in step.rigid})
-        rotations = []
-        for r in step.rigid:
-            if r.rotation is not None:
-                end = np.asarray(r.rotation, float)
-                start = self._rotation_state.get(r.name, np.zeros(len(end)))
-                rotations += [(pair, start, end) for pair in self._pairs_on(r.name)]
-                self._rotation_state[r.name] = end
+        rotations = [(pair, np.asarray(p.scene.rotation_at(r.name, index, 0.0)),
+                      np.asarray(r.rotation, float))
+                     for r in step.rigid if r.rotation is not None
+                     for pair in self._pairs_on(r.name)]
         # prescribed displacements (bcs that share nodes agree: scene.validation.check_bcs)
         n = p.layout.n_owned * d
         total, count = np.zeros(n), np.zeros(n)

@@ -213,6 +213,21 @@ class Scene:
     def body(self, name: str) -> Optional[Body]:
         return next((b for b in self.bodies if b.name == name), None)
 
+    def rotation_at(self, name: str, step: int, tau: float) -> Optional[tuple[float, ...]]:
+        """The rotation of obstacle ``name`` at the time ``tau`` (0..1) of step ``step``
+        [rad]: from the total at the end of the steps before (0 before any) to this step's
+        total (the last one given), linearly; None if no step up to this one turns it."""
+        def given(s: Step) -> Optional[tuple[float, ...]]:
+            return next((m.rotation for m in s.rigid if m.name == name), None)
+        start = None
+        for s in self.steps[:step]:
+            start = given(s) or start
+        end = given(self.steps[step]) or start
+        if end is None:
+            return None
+        start = start or (0.0,) * len(end)
+        return tuple(a + tau * (b - a) for a, b in zip(start, end))
+
 
 #: The rules of each dataclass, by scene-file key in file order: checked when an object is
 #: built (from Python or by the scene reader, which takes the key names from here).

@@ -369,6 +369,10 @@ def test_rotating_rigid(tmp_path):
     assert scene.steps[0].rigid[0] == RigidMotion("ball", displacement=(0.0, 0.0, -0.01),
                                                   rotation=(0.0, 0.5, 0.0))
     assert scene.steps[1].rigid[0].rotation is None
+    # ramped from 0 in its step, kept after it
+    assert scene.rotation_at("ball", 0, 0.5) == (0.0, 0.25, 0.0)
+    assert scene.rotation_at("ball", 1, 0.5) == (0.0, 0.5, 0.0)
+    assert parse_scene(edited("rigid3d")).rotation_at("ball", 1, 0.5) is None
     data = edited("rigid2d", append("step.0.rigid", {"name": "floor", "displacement": [0, 0],
                                                      "rotation": 1}))
     scene = parse_scene(data)
