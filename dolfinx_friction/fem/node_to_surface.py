@@ -45,7 +45,8 @@ from dolfinx_friction.errors import ContactSetupError
 from dolfinx_friction.fem.contact_settings import CALCULIX, ContactSettings
 from dolfinx_friction.fem.numbering import BodyField, DofLayout
 from dolfinx_friction.fem.obstacles import (  # noqa: F401  (rigid_*: re-exported)
-    Obstacle, _vector, rigid_cylinder, rigid_plane, rigid_sphere, rotation_size)
+    Obstacle, SignedDistance, _vector, rigid_cylinder, rigid_plane, rigid_sdf, rigid_sphere,
+    rotation_size)
 from dolfinx_friction.fem.pairing import ContactInteraction, RigidMaster
 from dolfinx_friction.fem.surfaces import SlaveNodes, master_faces
 from dolfinx_friction.fem.tagged_mesh import BodyMesh
@@ -173,8 +174,10 @@ class NodeToSurface:
     slave : Surface
         The facets whose nodes are projected onto the master.
     master : Surface or Obstacle
-        Master facets of a (usually other) body, or an analytic rigid obstacle; a rigid
-        obstacle's translation is :attr:`obstacle_translation` (prescribed, no dofs).
+        Master facets of a (usually other) body, an analytic rigid obstacle, or one given by
+        a signed distance (:func:`rigid_sdf`); a rigid obstacle's translation is
+        :attr:`obstacle_translation` (prescribed, no dofs), its rotation
+        :attr:`obstacle_rotation`.
     spaces : sequence of dolfinx FunctionSpaces, optional
         The spaces of the user's system, in block order (default: the slave's space,
         then the master's if it is another one).
@@ -231,9 +234,10 @@ class NodeToSurface:
         comm = slave.V.mesh.comm
         self.comm, self.name = comm, name
         self.gdim = _check_space(slave.V, f"{name}: slave")
-        if not isinstance(master, (Surface, Obstacle)) and hasattr(master, "shape"):
+        if (not isinstance(master, (Surface, Obstacle, SignedDistance))
+                and hasattr(master, "shape")):
             master = Obstacle.like(master)  # a scene's Rigid
-        rigid = isinstance(master, Obstacle)
+        rigid = isinstance(master, (Obstacle, SignedDistance))
         if not rigid:
             if _check_space(master.V, f"{name}: master") != self.gdim:
                 raise ContactSetupError(f"{name}: slave and master meshes differ in dimension")
@@ -252,7 +256,7 @@ class NodeToSurface:
                 raise ContactSetupError(f"{name}: a rigid cylinder needs a 3D mesh (use "
                                         f"rigid_sphere for a circle in 2D)")
             for key in ("point", "normal", "center", "axis", "reference"):
-                v = getattr(master, key)
+                v = getattr(master, key, None)
                 if v is not None and len(v) != self.gdim:
                     raise ContactSetupError(f"{name}: the obstacle's {key} has {len(v)} "
                                             f"components, the mesh is {self.gdim}D")
@@ -335,7 +339,12 @@ class NodeToSurface:
             what = "an angle (a number)" if size == 1 else "a rotation vector of 3 numbers"
             raise ContactSetupError(f"{self.name}: obstacle rotation must be {what} in "
                                     f"{self.gdim}D, got {np.asarray(value).tolist()}")
-        master.rotation[:] = _vector(theta, f"{self.name}: obstacle rotation")
+        theta = _vector(theta, f"{self.name}: obstacle rotation")
+        if master.rigid.pivot is None and any(theta):
+            raise ContactSetupError(f"{self.name}: obstacle rotation: the obstacle "
+                                    f"{master.rigid.name!r} has no reference point to rotate "
+                                    f"about (give it a reference)")
+        master.rotation[:] = theta
 
     def obstacle_moment(self):
         """Moment of the contact about the rigid obstacle's current reference point (its
@@ -350,7 +359,9 @@ class NodeToSurface:
         if el.result is not None and len(el.slave):
             x = self._interaction.slaves.X[el.slave] + self._u_slaves[el.slave]
             q = x - el.result.g_N[:, None] * el.normal
-            c = np.asarray(master.rigid.pivot, float) + self._interaction.master_motion
+            pivot = master.rigid.pivot
+            c = (np.zeros(d) if pivot is None else np.asarray(pivot, float)) \
+                + self._interaction.master_motion
             arm, f = q - c, el.result.f[:, 0, :]
         if d == 2:
             return float(self.comm.allreduce(np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0])))

@@ -14,7 +14,7 @@ translated by ``t``: ``x = Q (X - c) + c + t`` (:func:`rotation_matrix`, :meth:`
 """
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -22,8 +22,8 @@ from dolfinx_friction import rules as r
 from dolfinx_friction.errors import ContactSetupError
 from dolfinx_friction.rules import Key, Rules, fail, join, validate
 
-__all__ = ["SHAPES", "Obstacle", "rigid_cylinder", "rigid_plane", "rigid_sphere",
-           "rotation_matrix", "rotation_size"]
+__all__ = ["SHAPES", "Obstacle", "SignedDistance", "rigid_cylinder", "rigid_plane",
+           "rigid_sdf", "rigid_sphere", "rotation_matrix", "rotation_size"]
 
 SHAPES = ("plane", "sphere", "cylinder")
 Vector = tuple[float, ...]
@@ -77,6 +77,51 @@ class Obstacle:
             v = getattr(self, key)
             out[key] = None if v is None else Q @ np.asarray(v, float)
         return out
+
+
+@dataclass(frozen=True)
+class SignedDistance:
+    """A rigid obstacle given by a signed distance function (Python API only): ``distance(y)``
+    (n, gdim) -> (n,) [length], > 0 outside the obstacle (towards the body), and its
+    ``gradient(y)`` (n, gdim), the outward normal; ``hessian(y)`` (n, gdim, gdim) makes the
+    tangent exact (:func:`rigid_sdf` defaults it to central differences of the gradient).
+    ``y`` are points of the obstacle's reference frame; it turns about ``reference`` (none:
+    it cannot turn, and its moment is taken about the origin)."""
+
+    distance: Callable[[Any], Any]
+    gradient: Callable[[Any], Any]
+    hessian: Callable[[Any], Any]
+    reference: Vector | None = None
+    name: str = "sdf"
+    shape: str = "sdf"
+
+    @property
+    def pivot(self) -> Vector | None:
+        """The point it rotates about, ``reference`` (None: it cannot rotate)."""
+        return self.reference
+
+
+def rigid_sdf(distance: Callable[[Any], Any], gradient: Callable[[Any], Any],
+              hessian: Callable[[Any], Any] | None = None,
+              reference: Sequence[float] | None = None, name: str = "sdf",
+              step: float = 1e-6) -> SignedDistance:
+    """A rigid obstacle given by a signed distance (:class:`SignedDistance`); without
+    ``hessian``, central differences of ``gradient`` with ``step`` [length] (the tangent is
+    then exact to about ``step**2`` times the third derivatives)."""
+    if not (callable(distance) and callable(gradient)
+            and (hessian is None or callable(hessian))):
+        raise ContactSetupError(f"{name}: distance, gradient and hessian must be callables")
+    if hessian is None:
+        import numpy as np
+
+        def hessian(y):
+            y = np.asarray(y, float)
+            d = y.shape[1]
+            columns = [(np.asarray(gradient(y + step * e), float)
+                        - np.asarray(gradient(y - step * e), float)) / (2 * step)
+                       for e in np.eye(d)]
+            return np.stack(columns, axis=2)
+    return SignedDistance(distance, gradient, hessian, _reference(reference, name), name)
 
 
 def rotation_size(gdim: int) -> int:

@@ -18,10 +18,11 @@ from scipy.spatial import cKDTree
 
 from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, ElementResult,
                                               Kinematics, evaluate, face_kinematics,
-                                              rigid_kinematics)
+                                              rigid_kinematics, sdf_kinematics)
 from dolfinx_friction.contact.friction import FrictionState
 from dolfinx_friction.contact.projection import clearances
-from dolfinx_friction.fem.obstacles import Obstacle, rotation_matrix, rotation_size
+from dolfinx_friction.fem.obstacles import (Obstacle, SignedDistance, rotation_matrix,
+                                             rotation_size)
 from dolfinx_friction.fem.surfaces import MasterFaces, SlaveNodes
 
 
@@ -61,7 +62,7 @@ class RigidMaster:
     ``rotation_n`` and ``translation_n`` are the pose at the last commit (the increment's
     start)."""
 
-    rigid: Obstacle
+    rigid: Union[Obstacle, SignedDistance]
     node: Optional[int] = None
     translation: Optional[np.ndarray] = None
     rotation: Optional[np.ndarray] = None
@@ -80,6 +81,9 @@ class RigidMaster:
         one) and translated by ``U`` (gdim,)."""
         r = self.rigid
         turned = self.rotation if rotation is None else rotation
+        if isinstance(r, SignedDistance):
+            return sdf_kinematics(X, u, U, r.distance, r.gradient, r.hessian,
+                                  rotation_matrix(turned, len(U)), r.pivot)
         if not turned.any():
             return rigid_kinematics(r.shape, X, u, U, point=r.point, normal=r.normal,
                                     center=r.center, axis=r.axis, radius=r.radius or 0.0)
