@@ -9,7 +9,7 @@ an elastic block (2n x 2n x n hexahedra, Q4 slave faces) on a foundation (m x m 
 master), E = 1000, nu = 0.3 for both, linear law with CalculiX's K = 50 E and
 lambda = E/2 (``"calculix"``), mu = 0.3; step 1 presses the block top down by 0.005
 (1 increment), step 2 slides it by 0.02 along x (2 increments, full slip), foundation
-bottom fixed.  Serial.
+bottom fixed; ``[solver] linear = "direct"`` (MUMPS at every size).  Serial.
 
 Each configuration runs in its own process (clean peak memory, nothing left in PETSc's
 options database):
@@ -69,7 +69,8 @@ def two_boxes_mesh(n: int) -> Path:
 def scene(n: int, contact: bool = True, slide_increments: int = 2, mu: float = MU):
     """The block on a foundation at resolution ``n`` (module docstring); ``mu = 0``:
     frictionless."""
-    from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Scene, Step
+    from dolfinx_friction.scene.model import (BC, Body, ContactPair, Output, Scene,
+                                              SolverSettings, Step)
     return Scene(
         mesh=two_boxes_mesh(n), bodies=(Body("block", E, NU), Body("foundation", E, NU)),
         contacts=(ContactPair("block_bottom", "foundation_top", mu=mu, K="calculix",
@@ -79,7 +80,8 @@ def scene(n: int, contact: bool = True, slide_increments: int = 2, mu: float = M
                Step("slide", increments=slide_increments,
                     bcs=(BC("block_top", (SLIDE, 0.0, -PRESS)),))),
         output=Output(fields=False, contact_table=False,
-                      reactions=("block_top", "foundation_bottom")))
+                      reactions=("block_top", "foundation_bottom")),
+        solver=SolverSettings("direct"))  # MUMPS unless the run is given GAMG's options
 
 
 def worker(args: list[str]) -> None:

@@ -18,7 +18,8 @@ automatic cutbacks, serial, MUMPS):
   pushed down by ``D3`` (contact radius a = 0.72, a/R = 0.072).
 
 Series: contact-zone element size ``h = 0.5 / n`` (``A_NOMINAL / n``), degree 1 and 2 (the displacement
-space; the geometry stays first order), penalty ``K = k E / h`` with k = 1, 10, 100, 1000.
+space; the geometry stays first order), penalty ``K = k E / h`` with k = 1, 10, 100, 1000, and
+the augmented Lagrangian (``method = "augmented"``) at the default k = 10.
 
 Measured: the load ``P`` from the reaction on the pushed top (x2 in 2D, x4 in 3D for the full
 cylinder/sphere), the analytic Hertz ``a`` and ``p0`` for that load
@@ -52,13 +53,15 @@ import numpy as np
 R, E, NU = 10.0, 1000.0, 0.3
 A_NOMINAL = 0.5  # contact half-width / radius the loads are chosen for
 D2, D3 = 0.04, 0.05  # prescribed approach of the top (2D, 3D)
-KS = (1, 10, 100, 1000)
+#: (k, method): the penalty K = k E/h, and the augmented Lagrangian at the default K
+SERIES = ((1, "penalty"), (10, "penalty"), (100, "penalty"), (1000, "penalty"),
+          (10, "augmented"))
 
 FULL = {"2d": {1: (4, 8, 16, 32, 64), 2: (4, 8, 16, 32)},
         "3d": {1: (2, 3, 4, 6, 8, 12, 16), 2: (2, 3, 4, 6, 8)}}
 QUICK = {"2d": {1: (4, 8), 2: (4,)},
          "3d": {1: (2, 3), 2: (2,)}}
-QUICK_KS = (10, 1000)
+QUICK_SERIES = ((10, "penalty"), (1000, "penalty"), (10, "augmented"))
 
 # sub-edges of the slave face types (local node pairs along the facet's edges)
 EDGES = {"L2": [(0, 1)], "L3": [(0, 2), (2, 1)], "T3": [(0, 1), (1, 2), (2, 0)],
@@ -98,23 +101,50 @@ def mesh_3d(n: int) -> Path:
     return path
 
 
-def scene(problem: str, n: int, degree: int, k: float):
+def mesh_axi(n: int) -> Path:
+    """The 3D problem's sphere as a meridian section (quarter disk of triangles, refined at
+    the pole as :func:`mesh_3d`)."""
+    from dolfinx_friction.reference.meshes import sphere_section
+    path = B.work_dir("hertz") / f"sphere_section_n{n}.msh"
+    if not path.exists():
+        sphere_section(path, R, h_contact=A_NOMINAL / n, h_far=2.0,
+                       refine_radius=2.0 * A_NOMINAL)
+    return path
+
+
+MESHES = {"2d": mesh_2d, "3d": mesh_3d, "axi": mesh_axi}
+
+
+def series_of(row: dict) -> tuple:
+    return row["k"], row.get("method", "penalty")
+
+
+def scene(problem: str, n: int, degree: int, k: float, method: str = "penalty"):
     from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Rigid, Scene, Step
     h = A_NOMINAL / n
     out = Output(fields=False, contact_table=False,
                  reactions=("cylinder_top",) if problem == "2d" else ("sphere_top",))
+    if problem == "axi":  # the 3D problem as an axisymmetric section (the reaction: all of F)
+        return Scene(
+            mesh=mesh_axi(n),
+            bodies=(Body("sphere", E, NU, degree=degree, plane="axisymmetric"),),
+            rigids=(Rigid("floor", "plane", point=(0.0, 0.0), normal=(0.0, 1.0)),),
+            contacts=(ContactPair("sphere_surface", "floor", K=k * E / h, method=method),),
+            steps=(Step("press", increments=1, bcs=(
+                BC("sphere_axis", (0.0, None)), BC("sphere_top", (0.0, -D3)))),),
+            output=out)
     if problem == "2d":
         return Scene(
             mesh=mesh_2d(n), bodies=(Body("cylinder", E, NU, degree=degree),),
             rigids=(Rigid("floor", "plane", point=(0.0, 0.0), normal=(0.0, 1.0)),),
-            contacts=(ContactPair("cylinder_surface", "floor", K=k * E / h),),
+            contacts=(ContactPair("cylinder_surface", "floor", K=k * E / h, method=method),),
             steps=(Step("press", increments=1, bcs=(
                 BC("cylinder_symmetry", (0.0, None)), BC("cylinder_top", (0.0, -D2)))),),
             output=out)
     return Scene(
         mesh=mesh_3d(n), bodies=(Body("sphere", E, NU, degree=degree),),
         rigids=(Rigid("floor", "plane", point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0)),),
-        contacts=(ContactPair("sphere_surface", "floor", K=k * E / h),),
+        contacts=(ContactPair("sphere_surface", "floor", K=k * E / h, method=method),),
         steps=(Step("press", increments=1, bcs=(
             BC("sphere_symmetry_x", (0.0, None, None)), BC("sphere_symmetry_y", (None, 0.0, None)),
             BC("sphere_top", (0.0, 0.0, -D3)))),),
@@ -137,6 +167,9 @@ def measure(result, problem: str) -> dict:
     if problem == "2d":
         P = 2.0 * F
         a_ref, p0_ref = hertz_line(P, R, E_star)
+    elif problem == "axi":
+        P = F  # per full revolution
+        a_ref, p0_ref, _ = hertz_sphere(P, R, E_star)
     else:
         P = 4.0 * F
         a_ref, p0_ref, _ = hertz_sphere(P, R, E_star)
@@ -160,7 +193,7 @@ def measure(result, problem: str) -> dict:
         Xc = X[a_[cross]] + t[:, None] * (X[b_[cross]] - X[a_[cross]])
         radii.append(np.linalg.norm(Xc[:, : d - 1], axis=1))
     radii = np.unique(np.round(np.concatenate(radii), 12))  # shared edges counted once
-    a_gap = float(radii.max() if problem == "2d" else radii.mean()) if len(radii) else math.nan
+    a_gap = float(radii.max() if d == 2 else radii.mean()) if len(radii) else math.nan
     # p0 and a of the elliptic profile p^2 = p0^2 (1 - r^2/a^2) fitted by least squares to
     # the closed nodes with p > 0.2 max p (as demos/hertz_cylinder.py does), leaving out nodes
     # with a negligible share of the slave area (the vertices of T6 faces: 1/999 of a face)
@@ -182,25 +215,25 @@ def measure(result, problem: str) -> dict:
             "penetration": float(-state.gap[s].min() / A_NOMINAL) if s.any() else 0.0}
 
 
-def run_series(problem: str, degrees: dict, ks, log, rows: list, save=lambda: None) -> list:
-    done = {(r["degree"], r["n"], r["k"]) for r in rows if r.get("ok")}
+def run_series(problem: str, degrees: dict, series, log, rows: list, save=lambda: None) -> list:
+    done = {(r["degree"], r["n"], series_of(r)) for r in rows if r.get("ok")}
     rows[:] = [r for r in rows if r.get("ok")]  # --resume: failed points are retried
     for degree, ns in degrees.items():
-        if all((degree, n, k) in done for n in ns for k in ks):
+        if all((degree, n, s) in done for n in ns for s in series):
             continue
         # warm-up (untimed): form compilation / cache loading of this problem and degree
-        B.timed_run(scene(problem, ns[0], degree, ks[0]))
+        B.timed_run(scene(problem, ns[0], degree, *series[0]))
         for n in ns:
             t0 = time.perf_counter()
-            (mesh_2d if problem == "2d" else mesh_3d)(n)
+            MESHES[problem](n)
             t_mesh = time.perf_counter() - t0
-            for k in ks:
-                if (degree, n, k) in done:
+            for k, method in series:
+                if (degree, n, (k, method)) in done:
                     continue
                 row = {"problem": problem, "degree": degree, "n": n, "h": A_NOMINAL / n,
-                       "k": k, "mesh_s": t_mesh}
+                       "k": k, "method": method, "mesh_s": t_mesh}
                 try:
-                    result, num = B.timed_run(scene(problem, n, degree, k))
+                    result, num = B.timed_run(scene(problem, n, degree, k, method))
                     row.update(num)
                     row.update(measure(result, problem))
                     row["ok"] = True
@@ -217,7 +250,8 @@ def run_series(problem: str, degrees: dict, ks, log, rows: list, save=lambda: No
 # ----------------------------------------------------------------------------- report
 def describe(row: dict) -> str:
     ratio = f" (a/h = {row['a_ref'] / row['h']:.0f})" if "a_ref" in row else ""
-    return f"P{row['degree']}, h = {row['h']:.3g}{ratio}, K = {row['k']} E/h"
+    augmented = ", augmented" if series_of(row)[1] == "augmented" else ""
+    return f"P{row['degree']}, h = {row['h']:.3g}{ratio}, K = {row['k']} E/h{augmented}"
 
 
 def chart(rows: list[dict], problem: str, title: str) -> Path:
@@ -225,21 +259,24 @@ def chart(rows: list[dict], problem: str, title: str) -> Path:
     ok = [r for r in rows if r["ok"]]
     fig, axes = plt.subplots(2, 2, figsize=(13, 9.5), dpi=100)
     axes = axes.ravel()
-    colours = {1: "#1f77b4", 10: "#2ca02c", 100: "#ff7f0e", 1000: "#d62728"}
+    colours = {(1, "penalty"): "#1f77b4", (10, "penalty"): "#2ca02c",
+               (100, "penalty"): "#ff7f0e", (1000, "penalty"): "#d62728",
+               (10, "augmented"): "#9467bd"}
     for ax, key, label in ((axes[0], "err_p0", "relative error in p0 (elliptic fit)"),
                            (axes[1], "err_a", "relative error in a (elliptic fit)"),
                            (axes[2], "err_p0_node", "relative error in p0 (centre node)"),
                            (axes[3], "err_a_gap", "relative error in a (gap zero on edges)")):
         for degree, marker, ls in ((1, "o", "-"), (2, "s", "--")):
-            for k in KS:
+            for k, method in SERIES:
                 pts = sorted((r["cpu"], max(r[key], 1e-6), r["n"]) for r in ok
                              if math.isfinite(r[key])
-                             if r["degree"] == degree and r["k"] == k)
+                             if r["degree"] == degree and series_of(r) == (k, method))
                 if not pts:
                     continue
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], ls=ls, marker=marker,
-                        color=colours[k], ms=5, lw=1, alpha=0.8,
-                        label=f"P{degree}, K = {k} E/h")
+                        color=colours[k, method], ms=5, lw=1, alpha=0.8,
+                        label=f"P{degree}, K = {k} E/h"
+                        + (", augmented" if method == "augmented" else ""))
         pts = [(r["cpu"], r[key] if math.isfinite(r[key]) else math.inf) for r in ok]
         front = B.pareto(pts)
         fx = [pts[i][0] for i in front]
@@ -275,8 +312,8 @@ def cheapest(rows: list[dict], target: float, keys=("err_p0", "err_a")):
     cancellation of errors, only to miss it again on the next finer mesh, does not count)."""
     good = []
     for r in rows:
-        series = [q for q in rows if q["degree"] == r["degree"] and q["k"] == r["k"]
-                  and q["n"] >= r["n"]]
+        series = [q for q in rows if q["degree"] == r["degree"]
+                  and series_of(q) == series_of(r) and q["n"] >= r["n"]]
         if r["ok"] and all(_worst(q, keys) <= target for q in series):
             good.append(r)
     return min(good, key=lambda r: r["cpu"]) if good else None
@@ -322,11 +359,11 @@ def report(all_rows: dict, machine: dict, load_end: float, quick: bool, figures:
         table_rows = []
         for r in rows:
             if not r["ok"]:
-                table_rows.append([r["degree"], r["n"], f"{r['h']:.4g}", "-", r["k"], "-", "-",
+                table_rows.append([r["degree"], r["n"], f"{r['h']:.4g}", "-", _k(r), "-", "-",
                                    "-", "-", "-", "-", "-", "-", "-", "failed: " + r["error"][:60]])
                 continue
             table_rows.append([
-                r["degree"], r["n"], f"{r['h']:.4g}", f"{r['a_ref'] / r['h']:.1f}", r["k"],
+                r["degree"], r["n"], f"{r['h']:.4g}", f"{r['a_ref'] / r['h']:.1f}", _k(r),
                 f"{r['dofs']:,}",
                 f"{r['newton']}" + (f" ({r['cutbacks']} cb)" if r["cutbacks"] else ""),
                 f"{100 * r['err_p0']:.3f}", f"{100 * r['err_a']:.3f}",
@@ -368,6 +405,11 @@ def report(all_rows: dict, machine: dict, load_end: float, quick: bool, figures:
     return "\n".join(out)
 
 
+def _k(row: dict) -> str:
+    """The penalty column: k of K = k E/h, "+ AL" for the augmented Lagrangian."""
+    return f"{row['k']}" + (" + AL" if series_of(row)[1] == "augmented" else "")
+
+
 def _title(problem: str, machine: dict) -> str:
     title = ("Hertz line contact (2D, cylinder on a rigid plane)" if problem == "2d"
              else "Hertz sphere (3D, eighth of a sphere on a rigid plane)")
@@ -396,12 +438,12 @@ def main(argv=None) -> None:
         return
     machine = B.machine()
     plan = QUICK if args.quick else FULL
-    ks = QUICK_KS if args.quick else KS
+    series = QUICK_SERIES if args.quick else SERIES
     all_rows, figures = {}, []
 
     def log(r):
         if r["ok"]:
-            print(f"{r['problem']} P{r['degree']} n={r['n']:3d} K={r['k']:5d}E/h dofs={r['dofs']:7d} "
+            print(f"{r['problem']} P{r['degree']} n={r['n']:3d} K={_k(r):>7}E/h dofs={r['dofs']:7d} "
                   f"newton={r['newton']:3d} cb={r['cutbacks']} err_p0={100 * r['err_p0']:7.3f}% "
                   f"err_a={100 * r['err_a']:7.3f}% err_p0_node={100 * r['err_p0_node']:7.3f}% "
                   f"err_a_gap={100 * r['err_a_gap']:7.3f}% cpu={r['cpu']:7.2f}s wall={r['wall']:7.2f}s "
@@ -420,8 +462,8 @@ def main(argv=None) -> None:
         all_rows.update(json.loads(Path(args.resume).read_text())["rows"])
     for problem in args.problems.split(","):
         all_rows.setdefault(problem, [])
-        run_series(problem, plan[problem], ks, log, all_rows[problem], save)
-        all_rows[problem].sort(key=lambda r: (r["degree"], r["n"], r["k"]))
+        run_series(problem, plan[problem], series, log, all_rows[problem], save)
+        all_rows[problem].sort(key=lambda r: (r["degree"], r["n"], series_of(r)))
         figures.append(chart(all_rows[problem], problem, _title(problem, machine)))
         print(f"chart: {figures[-1]}")
     save()

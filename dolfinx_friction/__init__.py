@@ -3,8 +3,10 @@
 The building blocks for a FEniCSx script (see the README, "Using the contact in your own
 FEniCSx code"): :class:`NodeToSurface` (one contact pair on the user's spaces and facet
 tags), :class:`Surface`, the rigid obstacles :func:`rigid_plane`, :func:`rigid_sphere`,
-:func:`rigid_cylinder`, :func:`rigid_sdf` (a signed distance), :func:`create_matrix`; :class:`BlockProblem` (bodies given by
-UFL residuals, with contact), :class:`Newton`, :func:`solve_steps`, :func:`snes_solve`.
+:func:`rigid_cylinder`, :func:`rigid_sdf` (a signed distance), :func:`create_matrix`;
+:class:`BlockProblem` (bodies given by UFL residuals, with contact), :class:`Newton`,
+:func:`solve_steps`, :func:`snes_solve`; :func:`revolution_weight` and
+:func:`axisymmetric_grad` for axisymmetric bodies.
 They import dolfinx on first use.
 
 The package logs through :mod:`logging` (logger ``dolfinx_friction``, silent unless the
@@ -47,6 +49,7 @@ _PUBLIC = {
     "solve_steps": "nls.stepping", "IncrementRecord": "nls.stepping",
     "ConvergenceError": "errors", "add_contact": "fem.snes", "SNESContact": "fem.snes",
     "Linear": "contact.laws", "Exponential": "contact.laws", "Tabular": "contact.laws",
+    "axisymmetric_grad": "fem.axisymmetric", "revolution_weight": "fem.axisymmetric",
 }
 __all__ = sorted(_PUBLIC)
 __getattr__, __dir__ = lazy_names(__name__, _PUBLIC)

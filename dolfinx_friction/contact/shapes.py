@@ -230,6 +230,18 @@ def face_areas(face: FaceType, coords: Array) -> Array:
     return np.linalg.norm(m, axis=-1) @ wts
 
 
+def revolved_area_shares(face: FaceType, coords: Array) -> Array:
+    """Each node's share ``int N_k 2 pi r ds`` (n_faces, nn) [length^2] of the surfaces of
+    revolution swept by 2D segments with node coordinates ``coords`` (n_faces, nn, 2) about
+    the axis ``r = x[..., 0] = 0``: a node on the axis gets its (small) share too."""
+    pts, wts = face.quadrature
+    phi, dphi, _ = face.evaluate(pts)
+    tangents = np.einsum("qka,fkd->fqad", dphi, coords)
+    lengths = np.linalg.norm(tangents[:, :, 0, :], axis=-1)  # (n_faces, n_q)
+    r = np.einsum("qk,fk->fq", phi, coords[..., 0])
+    return 2.0 * np.pi * np.einsum("fq,q,qk->fk", r * lengths, wts, phi)
+
+
 def unit_vector(v) -> Array:
     """``v / |v|``, scaled first so that tiny components (1e-200) still give a direction."""
     v = np.asarray(v, dtype=float)

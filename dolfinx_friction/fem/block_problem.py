@@ -14,9 +14,6 @@ does not depend on its displacement (a linear form) has it assembled once.
 """
 from __future__ import annotations
 
-import contextlib
-import time
-from dataclasses import dataclass, field
 from typing import Optional, Sequence
 
 import numpy as np
@@ -25,9 +22,11 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
-from dolfinx_friction.fem.pattern import CooPattern
+from dolfinx_friction.fem.body_forms import BodyForms
+from dolfinx_friction.fem.jacobian import BlockJacobian, JacobianSplit
 from dolfinx_friction.fem.rigid_motions import RigidMotions
 from dolfinx_friction.fem.numbering import DofLayout
+from dolfinx_friction.fem.timers import Timers
 from dolfinx_friction.fem.node_to_surface import ContactSetupError, NodeToSurface, Surface
 
 #: Residual norms below this many round-off units of the terms they sum (|J| |x| + |f_ext|
@@ -37,90 +36,6 @@ ROUNDOFF_FLOOR = 2 * np.finfo(float).eps
 #: A body's stiffness is symmetric when no entry differs from its transpose's by more than
 #: this share of the largest row sum (compiled forms sum in another order: round-off)
 SYMMETRY_TOL = 1e-12
-
-
-@dataclass
-class Timers:
-    """Time per phase, seconds: ``phases`` wall clock, ``cpu`` this process's CPU time
-    (on a shared machine the wall clock also counts the other jobs)."""
-
-    phases: dict = field(default_factory=lambda: dict.fromkeys(PHASES, 0.0))
-    cpu: dict = field(default_factory=lambda: dict.fromkeys(PHASES, 0.0))
-
-    def add(self, phase: str, seconds: float, cpu: float = 0.0) -> None:
-        self.phases[phase] += seconds
-        self.cpu[phase] += cpu
-
-    @contextlib.contextmanager
-    def measure(self, phase: str):
-        """Add the wall and CPU time of the ``with`` block to ``phase``."""
-        wall, cpu = time.perf_counter(), time.process_time()
-        try:
-            yield
-        finally:
-            self.add(phase, time.perf_counter() - wall, time.process_time() - cpu)
-
-
-@dataclass
-class JacobianSplit:
-    """The Jacobian ``J = K + C`` (serial): ``bulk`` is ``K``, the bodies' constant
-    stiffness with the constrained rows made identity rows (a PETSc matrix, the same object
-    while it does not change); ``C``, the contact tangent (zero in constrained rows), is the
-    sum of the ``values`` at ``(rows, cols)`` (repeated pairs add), all within the contact
-    surfaces' ``dofs`` (sorted).  With ``symmetric`` (``K`` is), the constrained columns
-    are zero in both: ``J`` is ``jacobian(x, symmetric=True)``."""
-
-    bulk: PETSc.Mat
-    dofs: np.ndarray
-    rows: np.ndarray
-    cols: np.ndarray
-    values: np.ndarray
-    symmetric: bool = False
-
-
-PHASES = ("setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
-          "output")
-
-
-def _is_linear(jacobian: ufl.Form, u) -> bool:
-    """Whether a Jacobian form does not depend on ``u`` (its body is linear)."""
-    from ufl.algorithms import expand_derivatives
-    return not expand_derivatives(ufl.derivative(jacobian, u)).integrals()
-
-
-class _Body:
-    """One block: compiled residual and Jacobian forms, its own vector and matrix."""
-
-    def __init__(self, F: ufl.Form, u, J: Optional[ufl.Form], bcs: Sequence):
-        V = u.function_space
-        J = J if J is not None else ufl.derivative(F, u)
-        self.u, self.V, self.bcs = u, V, list(bcs)
-        self.linear = _is_linear(J, u)
-        #: linear and zero at u = 0: its residual is the product of its Jacobian with u
-        self.homogeneous = self.linear and not ufl.replace(
-            F, {u: ufl.zero(*u.ufl_shape)}).integrals()
-        self.F, self.J = compat.form(F), compat.form(J)
-        self.b = compat.create_vector(self.F)
-        self.A = compat.create_matrix(self.J)
-        self.n_owned = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
-
-    def residual(self) -> np.ndarray:
-        """Owned values of ``F(u)`` (ghost contributions summed)."""
-        with self.b.localForm() as local:
-            local.set(0.0)
-        compat.assemble_vector_into(self.b, self.F)
-        return self.b.getArray(readonly=True)[: self.n_owned]
-
-    def jacobian_values(self) -> np.ndarray:
-        """CSR values of the body's Jacobian at its current ``u`` (no bcs)."""
-        self.A.zeroEntries()
-        compat.assemble_matrix_into(self.A, self.J)
-        return self.A.getValuesCSR()[2]
-
-
-def _same(kept: tuple, key: tuple) -> bool:
-    """Whether a cache's key holds the very objects of ``key`` (identity, not equality)."""
-    return all(a is b for a, b in zip(kept, key))
 
 
 class BlockProblem:
@@ -172,7 +87,7 @@ class BlockProblem:
                 raise ContactSetupError(f"{c.name}: built for another number of obstacles")
         self.bcs, self.contacts, self.n_obstacles = list(bcs), list(contacts), obstacles
         jacobians = jacobians or [None] * len(u)
-        self.bodies = [_Body(F, w, J, [bc for bc in bcs
+        self.bodies = [BodyForms(F, w, J, [bc for bc in bcs
                                        if compat.bc_on_space(bc, w.function_space)])
                        for F, w, J in zip(residuals, u, jacobians)]
         self.layout = DofLayout(self.comm, [V.dofmap.index_map for V in self.spaces], obstacles)
@@ -192,32 +107,15 @@ class BlockProblem:
         self._prescribed_values = np.zeros(0)
         self._constrained = self._bc_rows
         self.gather()
-        self._base, values = self._bulk_pattern()
-        self._motions = self._rigid_motions(names)
-        self._linear_data = {k: self._base.gather_values(k, values[k])
-                             for k, body in enumerate(self.bodies) if body.linear}
         #: bodies whose residual dolfinx assembles (the others are K u)
         self._assembled = [k for k, body in enumerate(self.bodies) if not body.homogeneous]
-        self._K_linear: Optional[PETSc.Mat] = None
-        if len(self._assembled) < len(self.bodies):
-            self._K_linear = self._base.create_matrix()
-            self._base.fill(self._K_linear, sum(self._linear_data[k] for k, body
-                                                in enumerate(self.bodies) if body.homogeneous))
-        self._pattern: Optional[CooPattern] = None
-        self._versions: Optional[list[int]] = None
-        self._J: Optional[PETSc.Mat] = None
-        self._abs: Optional[PETSc.Mat] = None  # |J_bulk|, for the round-off floor
-        self._abs_data: Optional[np.ndarray] = None
-        self._bulk_data: Optional[np.ndarray] = None  # bulk Jacobian values (last, or constant)
-        self._zeroed: Optional[tuple] = None  # (key, slots of the constrained rows, columns)
-        self._static: Optional[tuple] = None  # (key, free obstacle rows, Jacobian without contact)
-        self._coupling_slots: Optional[tuple] = None  # (key, contacts' slots, zeroed ones)
-        self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
-        self._surface_dofs: Optional[np.ndarray] = None  # of all contacts (fixed in serial)
-        self._modes: Optional[PETSc.NullSpace] = None
+        #: the Jacobian's matrix and caches (assembles the bodies' Jacobians: before the
+        #: rigid motions, which read them)
+        self.jacobians = BlockJacobian(self, [k for k, body in enumerate(self.bodies)
+                                              if body.homogeneous])
+        self._motions = self._rigid_motions(names)
         self._floor: Optional[float] = 0.0  # of the last residual; None: not computed yet
         self._floor_x = self.x  # the iterate of the last residual
-        self._spring = 0.0
         self._symmetric_bodies: Optional[bool] = None
         #: checks of an iterate (collective), each returning why it is inadmissible or None;
         #: the residual of an inadmissible iterate is infinite (Newton fails, and cuts back)
@@ -236,9 +134,11 @@ class BlockProblem:
         eliminated (``jacobian(x, symmetric=True)``): every body linear with a symmetric
         stiffness (checked once, to :data:`SYMMETRY_TOL`; collective) and every contact
         frictionless (its force derives from a potential: contact-theory 7.4)."""
-        return self._bodies_symmetric() and all(c.mu == 0.0 for c in self.contacts)
+        return self.bodies_symmetric() and all(c.mu == 0.0 for c in self.contacts)
 
-    def _bodies_symmetric(self) -> bool:
+    def bodies_symmetric(self) -> bool:
+        """Whether every body is linear with a symmetric stiffness (checked once, to
+        :data:`SYMMETRY_TOL`; collective)."""
         if self._symmetric_bodies is None:
             self._symmetric_bodies = self.linear and all(
                 body.A.isSymmetric(SYMMETRY_TOL * body.A.norm(PETSc.NormType.NORM_INFINITY))
@@ -337,21 +237,6 @@ class BlockProblem:
         return np.setdiff1d(rows, self._prescribed_rows)
 
     # ------------------------------------------------------------ assembly
-    def _bulk_pattern(self) -> tuple[CooPattern, list[np.ndarray]]:
-        """The pattern of the bodies' Jacobians in the block numbering, and each body's
-        CSR values at its current ``u`` (assembled once for both)."""
-        d = self.gdim
-        blocks, values = [], []
-        for k, body in enumerate(self.bodies):
-            compat.assemble_matrix_into(body.A, body.J)  # a new matrix: zero before
-            indptr, cols, data = body.A.getValuesCSR()
-            values.append(data)
-            rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
-            cols = cols.astype(np.int64)
-            blocks.append((self.layout.nodes(k)[rows // d] * d + rows % d,
-                           self.layout.from_block_global(k, cols // d) * d + cols % d))
-        return CooPattern(self.comm, self.layout.n_owned * d, blocks), values
-
     def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> float:
         """``b = R(x)``: the bodies' residuals minus :attr:`f_ext` plus the contact forces
         at their last :meth:`NodeToSurface.update`, zero in constrained rows.  Also sets
@@ -364,8 +249,9 @@ class BlockProblem:
             self.inadmissible = next((r for r in (g() for g in self.guards) if r), "")
             if self.inadmissible:
                 return np.inf
-            if self._K_linear is not None:  # the homogeneous linear bodies: K u
-                self._K_linear.mult(x, b)
+            K_linear = self.jacobians.K_linear
+            if K_linear is not None:  # the homogeneous linear bodies: K u
+                K_linear.mult(x, b)
                 values = b.getArray()
             else:
                 values = np.zeros(self.layout.n_owned * self.gdim)
@@ -460,7 +346,7 @@ class BlockProblem:
         reason to accept it).  Computed on the first call after each residual."""
         if self._floor is None:
             with self.timers.measure("bulk_assembly"):
-                self._scale_of_bulk(self._floor_x)
+                self.jacobians.scale_of_bulk(self._floor_x, self._scale)
             with self.timers.measure("contact_assembly"):
                 for c in self.contacts:
                     c.add_roundoff(self._scale)
@@ -471,45 +357,10 @@ class BlockProblem:
             self._floor = floor if np.isfinite(floor) else 0.0
         return self._floor
 
-    def _scale_of_bulk(self, x: PETSc.Vec) -> None:
-        """``|J_bulk| |x| + |f_ext|`` into the round-off scale (contacts add theirs); a
-        nonlinear body's ``J`` is the one of the last :meth:`jacobian`."""
-        if self._abs is None or self._abs_data is not self._bulk_data:
-            if self._bulk_data is None:
-                self._bulk_data = self._bulk_values()
-            if self._abs is None:
-                self._abs = self._base.create_matrix()
-            self._base.fill(self._abs, np.abs(self._bulk_data))
-            self._abs_data = self._bulk_data
-        ax = x.copy()
-        ax.abs()
-        self._abs.mult(ax, self._scale)
-        ax.destroy()
-        self._scale.setArray(self._scale.getArray() + np.abs(self.f_ext))
-
-    def _bulk_values(self) -> np.ndarray:
-        """Values of the bodies' Jacobians at their current ``u``, in the bulk pattern."""
-        base = np.zeros(self._base.nnz)
-        for k, body in enumerate(self.bodies):
-            base += (self._linear_data[k] if body.linear
-                     else self._base.gather_values(k, body.jacobian_values()))
-        return base
-
     def matrix(self) -> PETSc.Mat:
         """The Jacobian matrix for the current contact couplings (a new one when they
-        changed since the last call; collective).  It carries the block size and the
-        bodies' rigid-body modes as near null space (for algebraic multigrid)."""
-        versions = [c.couplings_version for c in self.contacts]
-        if self._J is None or versions != self._versions:
-            self._pattern = self._base.extended([c.couplings() for c in self.contacts])
-            if self._J is not None:
-                self._J.destroy()
-            self._J = self._pattern.create_matrix(self.gdim)
-            self._J.setNearNullSpace(self.rigid_body_modes())
-            for c in self.contacts:
-                c.register_matrix(self._J)
-            self._versions = versions
-        return self._J
+        changed since the last call; collective): :meth:`BlockJacobian.matrix`."""
+        return self.jacobians.matrix()
 
     def jacobian(self, x: PETSc.Vec, A: Optional[PETSc.Mat] = None,
                  symmetric: bool = False) -> PETSc.Mat:
@@ -517,119 +368,17 @@ class BlockProblem:
         (default :meth:`matrix`); returns it.  ``symmetric``: the constrained columns are
         zeroed too (symmetric where :attr:`symmetric`); a Newton step is the same, since the
         residual is zero in the constrained rows."""
-        with self.timers.measure("bulk_assembly"):
-            A = self.matrix() if A is None else A
-            if not self.linear:
-                self.scatter(x)
-            if self._bulk_data is None or not self.linear:
-                self._bulk_data = self._bulk_values()
-            base = self._bulk_data
-        with self.timers.measure("contact_assembly"):
-            static = self._static_values(base, symmetric)
-            slots, values = self._contact_values(static, symmetric)
-            self._pattern.fill_over(A, static, slots, values)
-        return A
+        return self.jacobians.jacobian(x, A, symmetric)
 
-    def _static_values(self, base: np.ndarray, symmetric: bool) -> np.ndarray:
-        """CSR data (pattern of :meth:`matrix`) of the Jacobian without contact: the bulk
-        ``base``, the constrained rows (``symmetric``: and columns) zero but for a unit
-        diagonal, the obstacles' springs.  Kept while pattern, ``base`` and rows are the
-        same objects and the free obstacle rows the same (linear bodies: once per search)."""
-        rows, free = self.constrained_rows, self.free_obstacle_rows()
-        key = (self._pattern, base, rows, symmetric)
-        cached = self._static
-        if cached is not None and _same(cached[0], key) and np.array_equal(cached[1], free):
-            return cached[2]
-        data = self._pattern.from_base(base)
-        data[self._zeroed_slots(rows, symmetric)] = 0.0
-        # A force-controlled obstacle may have no stiffness along some axis (a
-        # frictionless plane in its own plane): a tiny spring in the Jacobian only keeps
-        # it regular; the residual, hence the solution, is unchanged.
-        data[self._pattern.diagonal_slots[free]] += self._rigid_spring(base)
-        data[self._pattern.diagonal_slots[rows]] = 1.0
-        self._static = (key, free, data)
-        return data
+    def split(self) -> Optional[JacobianSplit]:
+        """The Jacobian as a constant bulk matrix plus the contact entries, or None where
+        that split does not hold (:meth:`BlockJacobian.split`)."""
+        return self.jacobians.split()
 
-    def _zeroed_slots(self, rows: np.ndarray, symmetric: bool) -> np.ndarray:
-        """CSR slots of the constrained ``rows`` (``symmetric``: and of their columns on
-        every rank; collective), kept with the pattern and the rows."""
-        key = (self._pattern, rows, symmetric)
-        cached = self._zeroed
-        if cached is None or not _same(cached[0], key):
-            columns = (np.concatenate(self.comm.allgather(self._global_rows(rows)))
-                       if symmetric else None)
-            self._zeroed = cached = (key, self._pattern.row_slots(rows, columns))
-        return cached[1]
-
-    def _contact_values(self, static: np.ndarray, symmetric: bool
-                        ) -> tuple[np.ndarray, np.ndarray]:
-        """The slots of the contacts' couplings (kept with the pattern) and the Jacobian's
-        values there: ``static`` plus the contacts' tangents, but in the constrained rows
-        (``symmetric``: and columns)."""
-        rows = self.constrained_rows
-        gathered = [self._pattern.gather_slots(k, c.coupling_values())
-                    for k, c in enumerate(self.contacts)]
-        key = (self._pattern, rows, symmetric)
-        cached = self._coupling_slots
-        if cached is None or not _same(cached[0], key):
-            slots = np.unique(np.concatenate([at for at, _ in gathered]
-                                             + [np.zeros(0, np.int64)]))
-            zeroed = np.isin(slots, self._zeroed_slots(rows, symmetric))
-            self._coupling_slots = cached = (key, slots, zeroed)
-        _, slots, zeroed = cached
-        contact = np.zeros(len(slots))
-        for at, sums in gathered:
-            contact[np.searchsorted(slots, at)] += sums
-        contact[zeroed] = 0.0
-        return slots, static[slots] + contact
-
-    def _global_rows(self, rows: np.ndarray) -> np.ndarray:
-        """Global indices of owned local rows."""
-        return (rows + self.x.getOwnershipRange()[0]).astype(PETSc.IntType)
-
-    def split(self) -> Optional["JacobianSplit"]:
-        """The Jacobian at the contacts' last update as a constant bulk matrix plus a
-        contact part supported on the contact surfaces (no matrix is filled), or None where
-        that split does not hold or is not implemented: a body that is not linear, rigid
-        obstacles (their rows have no bulk stiffness), several ranks (the contact entries
-        and dofs are local indices)."""
-        if not self.linear or self.n_obstacles or self.comm.size > 1 or not self.contacts:
-            return None
-        rows = self.constrained_rows
-        with self.timers.measure("bulk_assembly"):
-            if self._bulk_bc is None or self._bulk_bc[0] is not rows:
-                if self._bulk_bc is not None:
-                    self._bulk_bc[1].destroy()
-                data = (self._bulk_values() if self._bulk_data is None
-                        else self._bulk_data.copy())
-                data[self._base.row_slots(rows)] = 0.0
-                data[self._base.diagonal_slots[rows]] = 1.0
-                K = self._base.create_matrix(self.gdim)
-                self._base.fill(K, data)
-                if self._bodies_symmetric():
-                    K.zeroRowsColumns(self._global_rows(rows), diag=1.0)
-                self._bulk_bc = (rows, K)
-        with self.timers.measure("contact_assembly"):
-            free = np.ones(self.layout.n_owned * self.gdim, bool)
-            free[rows] = False
-            entries = [c.element_entries() for c in self.contacts]
-            r, k, v = (np.concatenate(e) for e in zip(*entries))
-            keep = (v != 0.0) & free[r]
-            if self._bodies_symmetric():  # the constrained columns eliminated, as in K
-                keep &= free[k]
-            if self._surface_dofs is None:
-                self._surface_dofs = np.unique(np.concatenate(
-                    [c.surface_dofs() for c in self.contacts]))
-        return JacobianSplit(self._bulk_bc[1], self._surface_dofs, r[keep], k[keep], v[keep],
-                             self._bodies_symmetric())
-
-    def _rigid_spring(self, base: np.ndarray) -> float:
-        """1e-12 of the largest bulk diagonal entry (found once)."""
-        if not self._spring and self.n_obstacles:
-            diagonal = np.abs(base[self._base.diagonal_slots])
-            self._spring = 1e-12 * self.comm.allreduce(float(diagonal.max(initial=0.0)),
-                                                       op=MPI.MAX)
-        return self._spring
+    def rigid_body_modes(self) -> PETSc.NullSpace:
+        """Translations and rotations of every body, orthonormal (collective): the near null
+        space of elasticity for algebraic multigrid."""
+        return self.jacobians.rigid_body_modes()
 
     def _rigid_motions(self, names: Optional[Sequence[str]]) -> RigidMotions:
         """The bodies' rigid motions, with what their own Jacobians (just assembled at the
@@ -681,26 +430,3 @@ class BlockProblem:
         if message:
             raise ContactSetupError(message)
 
-    def rigid_body_modes(self) -> PETSc.NullSpace:
-        """Translations and rotations of every body, orthonormal (collective): the near null
-        space of elasticity for algebraic multigrid.  An obstacle only translates."""
-        if self._modes is not None:
-            return self._modes
-        d = self.gdim
-        modes = [self.x.duplicate() for _ in range(3 if d == 2 else 6)]
-        values = np.zeros((len(modes), self.x.getLocalSize() // d, d))
-        for k, V in enumerate(self.spaces):
-            nodes = slice(int(self.layout.block_offsets[k]), int(self.layout.block_offsets[k + 1]))
-            X = V.tabulate_dof_coordinates()[: V.dofmap.index_map.size_local, :d]
-            values[:d, nodes] = np.eye(d)[:, None, :]
-            for j, (a, c) in enumerate([(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]):
-                values[d + j, nodes, a], values[d + j, nodes, c] = -X[:, c], X[:, a]
-        for k in range(self.n_obstacles):
-            values[:d, self.obstacle_rows(k)[:1] // d] = np.eye(d)[:, None, :]
-        for k, mode in enumerate(modes):  # modified Gram-Schmidt
-            mode.setArray(values[k].ravel())
-            for previous in modes[:k]:
-                mode.axpy(-mode.dot(previous), previous)
-            mode.scale(1.0 / mode.norm())
-        self._modes = PETSc.NullSpace().create(vectors=modes, comm=self.comm)
-        return self._modes

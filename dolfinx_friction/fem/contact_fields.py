@@ -17,7 +17,8 @@ pairs, used by the result files, the pictures and the comparisons with reference
   ``contact.csv`` has them — ``X`` (n, gdim) reference coordinates [length], ``gap``
   [length] (< 0: overclosure), ``pressure`` [force / area], ``normal_force`` [force],
   ``tangential_force`` (n, gdim) [force] of the slave node on the master, ``slip``
-  [length], ``status``, ``area`` [length^2 in 3D, length x thickness in 2D].
+  [length], ``status``, ``area`` [length^2 in 3D, length x thickness in 2D; the revolved
+  area on an axisymmetric body, whose forces are per full revolution].
 """
 from __future__ import annotations
 

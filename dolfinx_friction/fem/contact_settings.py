@@ -20,6 +20,8 @@ __all__ = [
     "CALCULIX",
     "KEYS",
     "LAWS",
+    "MAX_AUGMENTATIONS",
+    "METHODS",
     "PENALTY_PER_SPACING",
     "STICK_SLOPE_PER_SPACING",
     "TANGENTS",
@@ -31,6 +33,13 @@ __all__ = [
 
 LAWS = ("linear", "exponential", "tabular", "hard")
 TANGENTS = ("consistent", "calculix")
+#: "penalty": the law's overclosure and the stick's elastic slip stay (small, with K and
+#: lambda); "augmented": Uzawa updates of multipliers remove them to a tolerance
+METHODS = ("penalty", "augmented")
+#: augmented Lagrangian updates an increment may take; one that needs more is cut back (a
+#: Uzawa update divides the violation by about 1 + K / (the structure's stiffness at a
+#: node): 2-4 updates at the default K)
+MAX_AUGMENTATIONS = 25
 
 #: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
 #: h: its node spacing, see :func:`defaults`), from the stability maps
@@ -96,6 +105,8 @@ KEYS: dict[str, Key] = {
     "stick_slope": Key(r.penalty),
     "tangent": Key(r.one_of(*TANGENTS)),
     "pairing_iterations": Key(r.integer(1, 10_000)),
+    "method": Key(r.one_of(*METHODS)),
+    "augmented_tolerance": Key(r.number(gt=0, lt=1)),
 }
 
 
@@ -143,6 +154,9 @@ class ContactSettings:
     tangent: str = "consistent"
     #: Newton iterations per increment in which slave nodes are re-paired (CalculiX: 8)
     pairing_iterations: int = 8
+    method: str = "penalty"  # one of METHODS
+    #: "augmented": the largest overclosure and stick slip left, per slave node spacing
+    augmented_tolerance: float = 1e-4
 
     def __post_init__(self) -> None:
         validate(self, RULES)

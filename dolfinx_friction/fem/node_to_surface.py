@@ -42,6 +42,7 @@ from dolfinx_friction import rules
 from dolfinx_friction.contact.element import OPEN, ContactParameters
 from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.errors import ContactSetupError
+from dolfinx_friction.fem.axisymmetric import section_fault
 from dolfinx_friction.fem.contact_settings import CALCULIX, ContactSettings
 from dolfinx_friction.fem.numbering import BodyField, DofLayout
 from dolfinx_friction.fem.obstacles import (  # noqa: F401  (rigid_*: re-exported)
@@ -198,9 +199,18 @@ class NodeToSurface:
         ``"consistent"`` (the exact tangent) or ``"calculix"``.
     thickness : float
         Out-of-plane thickness of a 2D (plane) body, scales slave areas.
+    axisymmetric : bool
+        The 2D meshes are meridian sections (r = x >= 0; :mod:`~dolfinx_friction.fem.
+        axisymmetric`): slave areas are those of the revolved faces, the contact forces
+        are per full revolution (``thickness`` is not used).
     pairing_iterations : int
         Newton iterations per increment that re-pair slave nodes (CalculiX: 8; 1 is small
         sliding).
+    method : str
+        ``"penalty"`` (default) or ``"augmented"``: augmented Lagrangian, multipliers
+        updated by :meth:`augment` (Uzawa) until the overclosure and the elastic slip of
+        sticking nodes are below ``augmented_tolerance`` (default 1e-4) times the slave
+        node spacing, K and lambda unchanged (docs/theory.md §6.5).
     obstacle_index, n_obstacles : int
         For a rigid obstacle whose translation is an unknown of a
         :class:`~dolfinx_friction.BlockProblem` with ``obstacles=n_obstacles`` (force- or
@@ -228,7 +238,9 @@ class NodeToSurface:
                  c0: Optional[float] = None, mu: float = 0.0,
                  stick_slope: Union[float, str, None] = None, E: Optional[float] = None,
                  tangent: str = "consistent", thickness: float = 1.0,
-                 pairing_iterations: int = 8, name: str = "contact",
+                 axisymmetric: bool = False,
+                 pairing_iterations: int = 8, method: str = "penalty",
+                 augmented_tolerance: float = 1e-4, name: str = "contact",
                  obstacle_index: Optional[int] = None, n_obstacles: int = 0,
                  body_names: tuple[str, str] = ("slave", "master")):
         comm = slave.V.mesh.comm
@@ -245,12 +257,12 @@ class NodeToSurface:
             spaces = [slave.V] if rigid or master.V is slave.V else [slave.V, master.V]
         self.spaces = list(spaces)
         given = self._given(law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
-                            pairing_iterations)
+                            pairing_iterations, method, augmented_tolerance)
         self.layout = DofLayout(comm, [V.dofmap.index_map for V in self.spaces], n_obstacles)
         slave_facets = _facets(slave, f"{name}: slave", comm)
         self._fields: list[BodyField] = []
         self._body_names = body_names
-        slave_field = self._field(slave.V, "slave", slave_facets, thickness)
+        slave_field = self._field(slave.V, "slave", slave_facets, thickness, axisymmetric)
         if rigid:
             if master.shape == "cylinder" and self.gdim != 3:
                 raise ContactSetupError(f"{name}: a rigid cylinder needs a 3D mesh (use "
@@ -277,7 +289,8 @@ class NodeToSurface:
                     raise ContactSetupError(f"{name}: slave and master share facets: a "
                                             f"surface cannot contact itself")
             self._obstacle = None
-            self._master_field = self._field(master.V, "master", master_facets, thickness)
+            self._master_field = self._field(master.V, "master", master_facets, thickness,
+                                             axisymmetric)
             # each facet once over all ranks: the ones this rank owns
             master_side = master_faces(self._master_field, "master")
         slaves = SlaveNodes(slave_field, "slave")
@@ -392,22 +405,25 @@ class NodeToSurface:
         """The contact settings as used, every default resolved, as plain numbers: ``law``
         (``"linear"``, ``"exponential"``, ``"tabular"``) and its parameters (``K``,
         ``sigma_inf``, ``c0`` / ``c0``, ``p0`` / ``pressures``, ``overclosures``),
-        ``mu``, ``stick_slope``, ``tangent``, ``pairing_iterations`` and the slave node
-        ``spacing`` h the defaults scale with."""
+        ``mu``, ``stick_slope``, ``tangent``, ``pairing_iterations``, ``method``,
+        ``augmented_tolerance`` and the slave node ``spacing`` h the defaults scale with."""
         return {"law": type(self.law).__name__.lower(), **asdict(self.law), "mu": self.mu,
                 "stick_slope": self.stick_slope, "tangent": self.params.element.tangent,
-                "pairing_iterations": self.params.pairing_iterations, "spacing": self.spacing}
+                "pairing_iterations": self.params.pairing_iterations,
+                "method": self.params.method,
+                "augmented_tolerance": self.params.augmented_tolerance, "spacing": self.spacing}
 
     # ------------------------------------------------------------- set-up
     def _given(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
-               pairing_iterations) -> ContactSettings:
+               pairing_iterations, method, augmented_tolerance) -> ContactSettings:
         """The parameters as given, checked by the contact settings' rules (the same
         one-line messages as a scene file's ``[[contact]]``); defaults still to be
         resolved."""
         try:
             given = ContactSettings(K=K, sigma_inf=sigma_inf, c0=c0, mu=mu,
                                     stick_slope=stick_slope, tangent=tangent,
-                                    pairing_iterations=pairing_iterations)
+                                    pairing_iterations=pairing_iterations, method=method,
+                                    augmented_tolerance=augmented_tolerance)
             if E is not None:
                 modulus(E, "E")
         except SceneError as error:
@@ -434,9 +450,10 @@ class NodeToSurface:
                                         f"give {key}")
         law = law if law is not None else make_law(pair)
         return _Parameters(ContactParameters(law, pair.mu, pair.stick_slope, pair.tangent),
-                           pair.pairing_iterations)
+                           pair.pairing_iterations, pair.method, pair.augmented_tolerance)
 
-    def _field(self, V, group: str, facets: np.ndarray, thickness: float) -> BodyField:
+    def _field(self, V, group: str, facets: np.ndarray, thickness: float,
+               axisymmetric: bool) -> BodyField:
         block = next((b for b, W in enumerate(self.spaces) if W is V), None)
         if block is None:
             raise ContactSetupError(f"{self.name}: the {group}'s function space is not one "
@@ -452,7 +469,10 @@ class NodeToSurface:
         groups = {group: (mesh.topology.dim - 1, facets)}
         X = V.tabulate_dof_coordinates()[:, : self.gdim].copy()
         f = BodyField(name, thickness, BodyMesh(name, mesh, groups), V, compat.function(V),
-                      block, self.layout.nodes(block), X)
+                      block, self.layout.nodes(block), X, axisymmetric=bool(axisymmetric))
+        fault = section_fault(f) if f.axisymmetric else ""
+        if fault:
+            raise ContactSetupError(f"{self.name}: {group} (axisymmetric): {fault}")
         self._fields.append(f)
         return f
 
@@ -530,6 +550,22 @@ class NodeToSurface:
         self._evaluated_at = None
         self._interaction.commit()
         self._saved = None
+
+    def augment(self) -> bool:
+        """With ``method="augmented"``, after a converged solve of the increment: one Uzawa
+        update of the multipliers where the overclosure or a sticking node's elastic slip
+        exceeds ``augmented_tolerance`` times the slave node spacing on some node; returns
+        whether it updated them (then solve the increment again: the contact forces are
+        those of the next :meth:`update`).  False with the penalty method.  Collective."""
+        if self.params.method != "augmented":
+            return False
+        inter = self._interaction
+        violation = self.comm.allreduce(inter.violation(), op=MPI.MAX)
+        if not violation > self.params.augmented_tolerance:
+            return False
+        inter.augment()
+        self._evaluated_at = None
+        return True
 
     def rollback(self) -> None:
         """Forget the increment: restore the history saved by :meth:`begin`."""
@@ -822,6 +858,8 @@ class NodeToSurface:
 class _Parameters:
     element: ContactParameters
     pairing_iterations: int
+    method: str
+    augmented_tolerance: float
 
 
 def create_matrix(a, contacts: Sequence[NodeToSurface] = ()) -> PETSc.Mat:

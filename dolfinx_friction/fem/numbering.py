@@ -9,7 +9,7 @@ rigid nodes; the scalar dof of node ``N``, component ``c`` is ``N*gdim + c``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
@@ -66,7 +66,9 @@ class DofLayout:
 @dataclass
 class BodyField:
     """A deformable body: its mesh, function space, displacement and system numbering;
-    ``thickness`` is the out-of-plane thickness of a 2D body (scales its areas)."""
+    ``thickness`` is the out-of-plane thickness of a 2D body (scales its areas), and an
+    ``axisymmetric`` 2D body is a meridian section (:mod:`~dolfinx_friction.fem.axisymmetric`:
+    its areas are those of the revolved surfaces, its thickness is not used)."""
 
     name: str
     thickness: float
@@ -76,6 +78,7 @@ class BodyField:
     block: int
     nodes: np.ndarray  # system node index per local node
     X: np.ndarray  # (n_local_nodes, gdim) reference coordinates per local node
+    axisymmetric: bool = field(default=False, kw_only=True)
 
     @property
     def gdim(self) -> int:
@@ -108,13 +111,16 @@ class BodyField:
 
 def make_fields(comm: MPI.Comm, meshes: Sequence[BodyMesh], n_rigid: int,
                 degrees: Optional[Sequence[Optional[int]]] = None,
-                thicknesses: Optional[Sequence[float]] = None
+                thicknesses: Optional[Sequence[float]] = None,
+                axisymmetric: Optional[Sequence[bool]] = None
                 ) -> tuple[list[BodyField], DofLayout]:
     """Function spaces for all bodies and the system numbering joining them: body ``k``
     (named ``meshes[k].name``) of degree ``degrees[k]`` (None, the default: the geometry
-    degree of its mesh) and thickness ``thicknesses[k]`` (default 1)."""
+    degree of its mesh), thickness ``thicknesses[k]`` (default 1) and axisymmetric if
+    ``axisymmetric[k]`` (default: no)."""
     degrees = list(degrees) if degrees is not None else [None] * len(meshes)
     thicknesses = list(thicknesses) if thicknesses is not None else [1.0] * len(meshes)
+    axisymmetric = list(axisymmetric) if axisymmetric is not None else [False] * len(meshes)
     spaces = []
     for bm, degree in zip(meshes, degrees):
         spaces.append(compat.vector_space(bm.mesh, degree or compat.geometry_degree(bm.mesh)))
@@ -124,5 +130,5 @@ def make_fields(comm: MPI.Comm, meshes: Sequence[BodyMesh], n_rigid: int,
         gdim = bm.mesh.geometry.dim
         X = V.tabulate_dof_coordinates()[:, :gdim].copy()
         fields.append(BodyField(bm.name, float(thickness), bm, V, compat.function(V), b,
-                                layout.nodes(b), X))
+                                layout.nodes(b), X, axisymmetric=bool(axisymmetric[b])))
     return fields, layout

@@ -169,6 +169,11 @@ class ContactInteraction:
         self._gap_offset = np.zeros(0)  # ramp offset of the current elements' clearances
         self.cutoff = params.law.cutoff(slaves.area)
         self.initial_gap = np.zeros(n)  # negative clearances found at the first pairing (§3.4)
+        #: augmented Lagrangian multipliers per slave node, as lengths (:meth:`augment`):
+        #: ``lambda_N / K`` shifts the overclosure the law sees, ``lambda_T / (lambda A)``
+        #: the reference of the elastic slip; zero for the penalty method
+        self.multiplier_N = np.zeros(n)
+        self.multiplier_T = np.zeros((n, gdim))
         self._first_pairing = True
         self.elements = Elements(*(np.zeros(0, int),) * 2, np.zeros((0, 2), int),
                                  *(np.zeros(0, int),) * 2)
@@ -408,6 +413,7 @@ class ContactInteraction:
             history.w[new] = self._kinematics(el, new, u_s, u_m, el.xi[new]).w
             history.g_T[new] = 0.0
             history.g_p[new] = 0.0
+            history.g_p -= self.multiplier_T[s]  # the elastic slip measured from its shift
             if self.rigid and self.master.rotating:
                 # the obstacle's material point under a node moved with its rotation too:
                 # s = w - (w_n + offset) (w = u_p - U holds the translation only).  A node
@@ -420,9 +426,11 @@ class ContactInteraction:
                                                           U_n)
         self._gap_offset = -ramp * self.initial_gap[s]
         el.result = evaluate(kin, self.slaves.area[s], self.params, history,
-                             gap_offset=self._gap_offset)
+                             gap_offset=self._gap_offset - self.multiplier_N[s])
         self.master_motion = self._gather(u)[0] if self.rigid else None
         self._trial = el.result.trial
+        if self._trial is not None:
+            self._trial.g_p += self.multiplier_T[s]
         # the clearance is a difference of coordinates: its round-off, times the tangent
         size = np.abs(self.slaves.X[s] + u_slaves[s]).max(axis=1, initial=0.0)
         nd = el.nodes.shape[1] * self.gdim
@@ -457,12 +465,45 @@ class ContactInteraction:
             self.history = fresh
         if self.rigid and self.master_motion is not None:
             self.master.commit(self.master_motion)
+        self.multiplier_N[~self.in_contact] = 0.0  # a node that touches anew starts at 0
+        self.multiplier_T[~self.in_contact] = 0.0
+
+    def _uzawa(self) -> tuple[np.ndarray, np.ndarray]:
+        """The augmented Lagrangian multipliers after one Uzawa update at the last
+        evaluation (docs/theory.md §6.5), as lengths per slave node: ``lambda_N <- max(0,
+        lambda_N + K d)`` with ``d`` the overclosure (the multiplier shifts the law's
+        argument by ``lambda_N / K``), ``lambda_T <- F_T`` (the friction force: inside the
+        Coulomb cone the stick's elastic slip goes into the multiplier); zero for nodes
+        without an element."""
+        el, r = self.elements, self.elements.result
+        N, T = np.zeros_like(self.multiplier_N), np.zeros_like(self.multiplier_T)
+        if r is not None and len(el.slave):
+            s = el.slave
+            N[s] = np.maximum(0.0, self.multiplier_N[s] - (r.g_N + self._gap_offset))
+            if self.params.mu > 0.0:
+                T[s] = r.F_T / (self.params.stick_slope * self.slaves.area[s])[:, None]
+        return N, T
+
+    def violation(self) -> float:
+        """What the next Uzawa update would change, on this rank: the largest change of a
+        multiplier as a length (the overclosure, the elastic slip of a sticking node)
+        relative to the node's spacing."""
+        N, T = self._uzawa()
+        change = np.maximum(np.abs(N - self.multiplier_N),
+                            np.linalg.norm(T - self.multiplier_T, axis=1))
+        return float(np.max(change / self.slaves.spacing, initial=0.0))
+
+    def augment(self) -> None:
+        """Make the Uzawa update (:meth:`_uzawa`); the elements must be evaluated again."""
+        self.multiplier_N, self.multiplier_T = self._uzawa()
 
     def save(self) -> tuple:
-        return self.history.copy(), self.in_contact.copy(), self.closed.copy()
+        return (self.history.copy(), self.in_contact.copy(), self.closed.copy(),
+                self.multiplier_N.copy(), self.multiplier_T.copy())
 
     def restore(self, saved: tuple) -> None:
-        self.history, self.in_contact, self.closed = (a.copy() for a in saved)
+        (self.history, self.in_contact, self.closed, self.multiplier_N,
+         self.multiplier_T) = (a.copy() for a in saved)
 
     def contact_state(self) -> np.ndarray:
         """(n, 2): status and master face id of every slave node on this rank ((-1, -1)

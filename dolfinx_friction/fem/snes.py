@@ -31,6 +31,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
 from dolfinx_friction.errors import ContactSetupError
+from dolfinx_friction.fem.contact_settings import MAX_AUGMENTATIONS
 from dolfinx_friction.fem.node_to_surface import NodeToSurface, create_matrix
 
 __all__ = ["History", "SNESContact", "add_contact"]
@@ -96,16 +97,27 @@ class SNESContact:
         self._started = True
 
     def solve(self) -> int:
-        """One increment: :meth:`begin`, the problem's ``solve()`` (its SNES), then
+        """One increment: :meth:`begin`, the problem's ``solve()`` (its SNES) and, for
+        contacts with ``method="augmented"``, again after each update of their multipliers
+        (:meth:`NodeToSurface.augment`, at most
+        :data:`~dolfinx_friction.fem.contact_settings.MAX_AUGMENTATIONS`), then
         :meth:`commit` if SNES converged, else :meth:`rollback` with the solution Functions
         back at the increment's start (also where SNES raises, e.g. with
         ``snes_error_if_not_converged``: then the error propagates).  Returns SNES's
-        converged reason (> 0 converged)."""
+        converged reason (> 0 converged; ``DIVERGED_MAX_IT`` where the updates did not
+        end)."""
         self.begin()
         start = self.problem.x.copy()
         try:
             self.problem.solve()
-            reason = self.snes.getConvergedReason()
+            reason, updates = self.snes.getConvergedReason(), 0
+            while reason > 0 and any([c.augment() for c in self.contacts]):
+                if updates == MAX_AUGMENTATIONS:
+                    reason = PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
+                    break
+                updates += 1
+                self.problem.solve()
+                reason = self.snes.getConvergedReason()
             if reason > 0:
                 self.commit()
             else:

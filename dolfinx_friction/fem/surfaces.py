@@ -12,7 +12,8 @@ import basix
 import numpy as np
 
 from dolfinx_friction import _compat as compat
-from dolfinx_friction.contact.shapes import FACE_TYPES, FaceType, face_areas, surface_vector
+from dolfinx_friction.contact.shapes import (
+    FACE_TYPES, FaceType, face_areas, revolved_area_shares, surface_vector)
 from dolfinx_friction.fem.materials import out_of_plane
 from dolfinx_friction.fem.numbering import BodyField
 
@@ -85,8 +86,10 @@ class SlaveNodes:
     """The owned slave nodes of a contact pair on this rank, with their areas ``A_p``.
 
     ``A_p = sum_f w_p,f A_f`` over the slave faces around the node
-    (docs/theory.md §2.1), thickness included in 2D; :meth:`update_areas`
-    recomputes it on the deformed faces (collective).
+    (docs/theory.md §2.1), thickness included in 2D; on an axisymmetric body the share
+    ``int N_p 2 pi r ds`` of the revolved faces (per full revolution; a node on the axis
+    gets the share of its faces too).  :meth:`update_areas` recomputes it on the deformed
+    faces (collective).
     """
 
     def __init__(self, field: BodyField, group: str):
@@ -104,19 +107,30 @@ class SlaveNodes:
     def update_areas(self) -> None:
         """``A_p`` on the faces as deformed by the body's current displacement."""
         f = self.field
-        self.area = self._areas(f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)])
-        thickness = out_of_plane(f.thickness, f.gdim)
-        #: nodal spacing: the side of the representative area (its length in 2D)
-        self.spacing = self.area / thickness if f.gdim == 2 else np.sqrt(self.area)
+        x = f.X + f.u.x.array.reshape(-1, f.gdim)[: len(f.X)]
+        self.area = self._areas(x)
+        #: nodal spacing: the side of the representative area (its length in 2D: the
+        #: meridian length of an axisymmetric body's)
+        if f.axisymmetric:
+            self.spacing = self._areas(x, revolved=False)
+        else:
+            thickness = out_of_plane(f.thickness, f.gdim)
+            self.spacing = self.area / thickness if f.gdim == 2 else np.sqrt(self.area)
 
-    def _areas(self, x: np.ndarray) -> np.ndarray:
+    def _areas(self, x: np.ndarray, revolved: bool = True) -> np.ndarray:
         """The owned slave nodes' representative areas (n,) with the body's nodes at ``x``
-        (local nodes, gdim) [length^2; in 2D length x thickness]."""
+        (local nodes, gdim) [length^2; in 2D length x thickness, or the revolved area of an
+        axisymmetric body; not ``revolved``: its length]."""
         f = self.field
-        thickness = out_of_plane(f.thickness, f.gdim)
-        areas = thickness * face_areas(self.face, x[self._facet_nodes])
+        coords = x[self._facet_nodes]
+        if f.axisymmetric and revolved:
+            shares = revolved_area_shares(self.face, coords)
+        else:
+            thickness = 1.0 if f.axisymmetric else out_of_plane(f.thickness, f.gdim)
+            areas = thickness * face_areas(self.face, coords)
+            shares = areas[:, None] * np.asarray(self.face.area_weights)[None, :]
         share = np.zeros((self._facet_nodes.size, f.gdim))
-        share[:, 0] = (areas[:, None] * np.asarray(self.face.area_weights)[None, :]).ravel()
+        share[:, 0] = shares.ravel()
         return f.to_owners(self._facet_nodes.ravel(), share)[self.local, 0]
 
 

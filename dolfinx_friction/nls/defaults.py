@@ -1,8 +1,11 @@
-"""Newton's settings that the scene model shares with the solvers (no PETSc here: the
-scene model reads them without importing the solvers)."""
+"""Newton's and the linear solver's settings that the scene model shares with the solvers
+(no PETSc here: the scene model reads them without importing the solvers)."""
 from __future__ import annotations
 
-__all__ = ["CONVERGENCE", "STALL_ITERATIONS"]
+from typing import Optional
+
+__all__ = ["CONVERGENCE", "DIRECT_MAX_DOFS", "ITERATIVE", "LINEAR_KINDS", "STALL_ITERATIONS",
+           "choose", "unsafe_option"]
 
 #: Newton's convergence tests (:mod:`dolfinx_friction.nls.newton`)
 CONVERGENCE = ("residual", "reactions")
@@ -11,3 +14,38 @@ CONVERGENCE = ("residual", "reactions")
 #: edge of a growing zone converge faster in halved increments (benchmarks/RESULTS.md;
 #: in converging solves off that kind the longest such run is 2)
 STALL_ITERATIONS = 6
+
+#: the kinds of linear solver a run may ask for (a scene's ``[solver] linear``)
+LINEAR_KINDS = ("auto", "direct", "iterative")
+#: GMRES preconditioned by smoothed-aggregation algebraic multigrid (the Jacobian carries
+#: its block size and the bodies' rigid-body modes as near null space); it stops at the
+#: relative residual Newton asks (:func:`~dolfinx_friction.nls.newton.forcing`)
+ITERATIVE = {"ksp_type": "gmres", "ksp_gmres_restart": 200, "ksp_max_it": 1000,
+             "ksp_atol": 0.0, "pc_type": "gamg"}
+#: the largest system ``"auto"`` factorises, by geometric dimension.  A 3D LU factor grows
+#: as dofs^(4/3): on the frictional block of benchmarks/RESULTS.md ("Cost per Newton
+#: iteration") at 114k dofs MUMPS with its kept factorisation took 7.6 s per Newton
+#: iteration and 5.9 GB, GMRES + GAMG 7.6 s and 1.9 GB; at 193k MUMPS 32 s, GAMG 31 s at
+#: 432k.  2D factors stay cheap far longer.
+DIRECT_MAX_DOFS = {2: 1_000_000, 3: 120_000}
+
+
+def choose(kind: str, dofs: int, gdim: int, direct_max_dofs: Optional[int] = None) -> str:
+    """``"direct"`` or ``"iterative"`` for a system of ``dofs`` unknowns in ``gdim``
+    dimensions: ``kind`` itself, or for ``"auto"`` direct up to ``direct_max_dofs``
+    (default :data:`DIRECT_MAX_DOFS`)."""
+    if kind != "auto":
+        return kind
+    limit = DIRECT_MAX_DOFS[gdim] if direct_max_dofs is None else direct_max_dofs
+    return "direct" if dofs <= limit else "iterative"
+
+
+def unsafe_option(name: str, value: object) -> str:
+    """Why a PETSc option from an input file may not be set ("" if it may): an input file
+    never runs code (``python`` types load Python classes) nor writes files of its own
+    choosing (``*_view`` options with a file)."""
+    if "python" in name or str(value).strip().lower() == "python":
+        return "would load Python code"
+    if "view" in name and ":" in str(value):
+        return "would write a file"
+    return ""

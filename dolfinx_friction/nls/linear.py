@@ -38,6 +38,11 @@ factorisation it keeps: once that preconditioned a solve); ``K`` is factorised o
 ``G``'s columns, at that path's back-solve flops, could pay (on a 35k-dof 3D block they
 cannot: 0.67 s of factorisation was spent for nothing).
 Serial only: under MPI the path above.
+An iterative solver (:data:`~dolfinx_friction.nls.defaults.ITERATIVE`: GMRES with
+algebraic multigrid, or any Krylov solver the options give without ``ksp_rtol``) stops at
+the relative residual Newton asks for each step (inexact Newton);
+:func:`~dolfinx_friction.nls.defaults.choose` picks direct or iterative by the size of the
+system (a scene's ``[solver] linear = "auto"``).
 ``symmetric=True`` (without user ``options``: Jacobians with the constrained rows and
 columns eliminated, of frictionless contact between linear bodies,
 :attr:`BlockProblem.symmetric`) factorises LDL^T (MUMPS, symmetric indefinite, from the
@@ -98,6 +103,10 @@ class LinearSolver:
         # only a factorisation is kept; only MUMPS reports what it cost
         self.reuse, self.max_krylov = reuse and pc.getType() in ("lu", "cholesky"), max_krylov
         self._counted = self.reuse and pc.getFactorSolverType() == "mumps"
+        #: a Krylov solver (not a kept factorisation) stops at the relative residual each
+        #: solve asks, unless the options fix ``ksp_rtol``
+        self._inexact = (not self.reuse and self.ksp.getType() != "preonly"
+                         and "ksp_rtol" not in options)
         self._factored_size: Optional[tuple] = None  # of the matrix last factorised
         self._paused = 0  # Jacobians still to factorise afresh
         self._pays = False  # the last factorisation is worth keeping
@@ -134,7 +143,7 @@ class LinearSolver:
 
     def solve_split(self, split, b: PETSc.Vec, x: PETSc.Vec) -> Optional[bool]:
         """Solve with the Jacobian given as bulk plus contact
-        (:class:`~dolfinx_friction.fem.block_problem.JacobianSplit`) by :class:`Condensed`; None when
+        (:class:`~dolfinx_friction.fem.jacobian.JacobianSplit`) by :class:`Condensed`; None when
         that does not pay (or failed): then :meth:`solve` with the assembled Jacobian."""
         if not (self.reuse and self._counted) or self._solves < (2 if self._pays else 1):
             return None  # priced once this path solved (with a factorisation it keeps: twice)
@@ -150,7 +159,8 @@ class LinearSolver:
     def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL
               ) -> bool:
         """Solve; returns False when the solver failed (:attr:`failure` says why).
-        ``rtol``: the relative residual GMRES stops at with a kept factorisation."""
+        ``rtol``: the relative residual a Krylov solve stops at (GMRES on a kept
+        factorisation; a Krylov solver whose options do not fix ``ksp_rtol``)."""
         keep = (self.reuse and self._pays and not self._paused
                 and J.getSize() == self._factored_size)
         self._paused = max(self._paused - 1, 0)
@@ -166,6 +176,8 @@ class LinearSolver:
         if self.reuse:
             self.ksp.setType("gmres" if keep else "preonly")
             self.ksp.setTolerances(rtol=rtol, max_it=self.max_krylov)
+        elif self._inexact:
+            self.ksp.setTolerances(rtol=rtol)
         self.ksp.setOperators(J, J)
         self.ksp.getPC().setReusePreconditioner(keep)
         self.ksp.solve(b, x)

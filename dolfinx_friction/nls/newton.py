@@ -42,10 +42,21 @@ class NewtonTrace:
     face_changes: list[int] = field(default_factory=list)
     backtracks: list[int] = field(default_factory=list)
     reason: str = ""
+    #: solves after the first, each after an augmented Lagrangian update (their
+    #: iterations are joined to the first's)
+    augmentations: int = 0
 
     @property
     def iterations(self) -> int:
         return len(self.backtracks)
+
+    def extend(self, again: "NewtonTrace") -> None:
+        """Join the trace of the solve that followed an augmented Lagrangian update."""
+        for name in ("residuals", "corrections", "reaction_changes", "status_changes",
+                     "face_changes", "backtracks"):
+            getattr(self, name).extend(getattr(again, name))
+        self.converged, self.reason = again.converged, again.reason
+        self.augmentations += 1
 
 
 class Newton:

@@ -20,6 +20,7 @@ import numpy as np
 from dolfinx_friction.errors import ConvergenceError
 from dolfinx_friction.nls.newton import Newton, NewtonTrace
 from dolfinx_friction.fem.block_problem import BlockProblem
+from dolfinx_friction.fem.contact_settings import MAX_AUGMENTATIONS
 
 
 @dataclass
@@ -99,6 +100,23 @@ class IncrementSize:
             self.level, self.easy = self.level - 1, 0
 
 
+def augment(problem: BlockProblem, newton: Newton, trace: NewtonTrace, start,
+            may_stall: bool) -> None:
+    """After a converged solve: while a contact pair with ``method="augmented"`` updates
+    its multipliers (:meth:`~dolfinx_friction.NodeToSurface.augment`), solve the increment
+    again from where it is, joining the iterations to ``trace``; ``trace`` ends
+    unconverged where a solve fails or the updates exceed
+    :data:`~dolfinx_friction.fem.contact_settings.MAX_AUGMENTATIONS`."""
+    while trace.converged and any([c.augment() for c in problem.contacts
+                                   if hasattr(c, "augment")]):
+        if trace.augmentations == MAX_AUGMENTATIONS:
+            trace.converged = False
+            trace.reason = (f"the augmented Lagrangian updates did not bring the overclosure "
+                            f"below its tolerance in {MAX_AUGMENTATIONS} solves")
+            return
+        trace.extend(newton.solve(problem, start=start, may_stall=may_stall))
+
+
 def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments: int = 1,
                 newton: Optional[Newton] = None, max_cutbacks: int = 6,
                 on_increment: Optional[Callable[[IncrementRecord], None]] = None,
@@ -135,6 +153,7 @@ def solve_steps(problem: BlockProblem, load: Callable[[float], None], increments
         for c in problem.contacts:
             c.begin(x, start=x_n)
         trace = newton.solve(problem, start=x_n, may_stall=size.level < max_cutbacks)
+        augment(problem, newton, trace, x_n, size.level < max_cutbacks)
         spent += trace.iterations
         ok, why = trace.converged, trace.reason
         if ok and not _finite(problem):

@@ -6,6 +6,8 @@ system.  References:
 * K. L. Johnson, *Contact Mechanics*, Cambridge University Press (1985):
   Hertz contact of cylinders (§4.3) and spheres (§4.2), tangential loading of
   cylinders and spheres in partial slip (Cattaneo–Mindlin, §7.1–§7.2).
+* S. P. Timoshenko, J. N. Goodier, *Theory of Elasticity*, 3rd ed. (1970), §33: thick
+  cylinders under pressure (Lamé), shrink fits.
 * Statics of a block on a rough inclined plane (Beer & Johnston, Meriam &
   Kraige, ...): the horizontal force that pushes a block of weight ``W`` up a
   slope at impending/steady sliding is ``P = W (sin a + mu cos a)/(cos a - mu sin a)``.
@@ -33,6 +35,7 @@ __all__ = [
     "HertzSphere", "hertz_sphere", "hertz_sphere_force", "hertz_sphere_pressure",
     "cattaneo_mindlin_stick_half_width", "cattaneo_mindlin_traction",
     "mindlin_sphere_stick_radius",
+    "lame_cylinder_displacement", "shrink_fit_pressure",
     "incline_push_ratio", "incline_hold_ratio",
     "fit_elliptic", "self_check",
 ]
@@ -143,6 +146,48 @@ def hertz_sphere_pressure(r, F: float, R: float, E_star: float) -> np.ndarray:
     a, p0, _ = hertz_sphere(F, R, E_star)
     r = np.asarray(r, dtype=float)
     return p0 * np.sqrt(np.clip(1.0 - (r / a) ** 2, 0.0, None))
+
+
+# --------------------------------------------------------- shrink fit (Lamé)
+def lame_cylinder_displacement(r, r_a: float, r_b: float, p_a: float, p_b: float, E: float,
+                               nu: float, ends: str = "free") -> np.ndarray:
+    """Radial displacement ``u(r)`` of a thick cylinder ``r_a <= r <= r_b`` under the
+    pressures ``p_a`` inside and ``p_b`` outside (Lamé; Timoshenko & Goodier §33).
+
+    ``sigma_r = A - B/r^2``, ``sigma_theta = A + B/r^2`` with
+    ``A = (p_a r_a^2 - p_b r_b^2) / (r_b^2 - r_a^2)``,
+    ``B = (p_a - p_b) r_a^2 r_b^2 / (r_b^2 - r_a^2)``; ``ends = "free"``: ``sigma_z = 0``,
+    ``u = ((1 - nu) A r + (1 + nu) B / r) / E``; ``"held"`` (plane strain, ``eps_z = 0``):
+    ``u = (1 + nu) ((1 - 2 nu) A r + B / r) / E``.
+    """
+    r = np.asarray(r, dtype=float)
+    A = (p_a * r_a ** 2 - p_b * r_b ** 2) / (r_b ** 2 - r_a ** 2)
+    B = (p_a - p_b) * r_a ** 2 * r_b ** 2 / (r_b ** 2 - r_a ** 2)
+    if ends == "free":
+        return ((1.0 - nu) * A * r + (1.0 + nu) * B / r) / E
+    if ends == "held":
+        return (1.0 + nu) * ((1.0 - 2.0 * nu) * A * r + B / r) / E
+    raise ValueError(f"ends must be 'free' or 'held', not {ends!r}")
+
+
+def shrink_fit_pressure(delta: float, r_i: float, r_c: float, r_o: float, E: float,
+                        nu: float = 0.0, ends: str = "free") -> float:
+    """Contact pressure of a shrink fit of two thick cylinders of one material (Lamé): an
+    inner one ``r_i .. r_c + delta`` in an outer one ``r_c .. r_o``, radial interference
+    ``delta << r_c``, frictionless::
+
+        p = E' delta (r_o^2 - r_c^2) (r_c^2 - r_i^2) / (2 r_c^3 (r_o^2 - r_i^2))
+
+    with ``E' = E`` for free ends (``sigma_z = 0``, ``nu`` drops out) and
+    ``E' = E / (1 - nu^2)`` for ends held axially (plane strain, ``eps_z = 0``): the
+    interference is taken up by the outer cylinder's widening and the inner one's
+    shrinking at ``r_c``, :func:`lame_cylinder_displacement`.
+    """
+    if ends not in ("free", "held"):
+        raise ValueError(f"ends must be 'free' or 'held', not {ends!r}")
+    E_eff = E if ends == "free" else E / (1.0 - nu * nu)
+    return (E_eff * delta * (r_o ** 2 - r_c ** 2) * (r_c ** 2 - r_i ** 2)
+            / (2.0 * r_c ** 3 * (r_o ** 2 - r_i ** 2)))
 
 
 # --------------------------------------------------------- partial slip
@@ -307,6 +352,20 @@ def self_check() -> None:
     close("two spheres: a = sqrt(R h/2)", sh.a, math.sqrt(Rs * h / 2))
     close("two spheres: p0 = E/(pi(1-nu^2)) sqrt(2h/R)", sh.p0,
           E / (math.pi * (1 - nu ** 2)) * math.sqrt(2 * h / Rs))
+
+    # shrink fit: the pressure closes the interference between the Lamé displacements
+    # of the two cylinders at r_c (both end conditions)
+    r_i, r_c, r_o, dl = 1.0, 2.0, 3.0, 0.01
+    for ends in ("free", "held"):
+        p = shrink_fit_pressure(dl, r_i, r_c, r_o, E, nu, ends)
+        gap = (lame_cylinder_displacement(r_c, r_c, r_o, p, 0.0, E, nu, ends)
+               - lame_cylinder_displacement(r_c, r_i, r_c, 0.0, p, E, nu, ends))
+        close(f"shrink fit ({ends} ends): u_outer - u_inner = delta", gap, dl)
+    # a thin ring (relative thickness t) on a solid shaft takes up the interference alone:
+    # its hoop stress p / t widens it by p r_c / (t E), so p -> E delta t / r_c as t -> 0
+    t = 1e-6
+    close("shrink fit: thin ring on a shaft, p = E delta t / r_c",
+          shrink_fit_pressure(dl, 0.0, r_c, r_c * (1 + t), E), E * dl * t / r_c, 1e-5)
 
     # Hertz line: handbook form for two rollers of one material:
     # width 2a = sqrt(32 P (1-nu^2) / (pi E (1/r1 + 1/r2))), peak 4P/(pi 2a)

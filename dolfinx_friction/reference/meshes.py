@@ -2,7 +2,8 @@
 where all ranks see them (``comm``'s ranks wait for rank 0).
 
 Bodies are physical groups of cells, facet groups name the faces the scenes use; lengths
-are dimensionless.  The CalculiX comparisons' meshes: :func:`blocks_on_foundation`,
+are dimensionless.  Meridian sections of axisymmetric bodies (r = x >= 0, z = y):
+:func:`thick_cylinders`, :func:`sphere_section`, :func:`ring_section`.  The CalculiX comparisons' meshes: :func:`blocks_on_foundation`,
 :func:`ironing` (with their scenes in :mod:`dolfinx_friction.reference.cases`).
 """
 from __future__ import annotations
@@ -126,6 +127,118 @@ def rectangle_2d(path: Path, n: tuple[int, int] = (8, 2), quads: bool = True,
         group(1, boundary(2, s, 0, 0.0), "left")
         group(1, boundary(2, s, 0, 1.0), "right")
     return write_model(build, path)
+
+
+def _transfinite_rectangle(s: int, n: tuple[int, int], quads: bool) -> None:
+    """A structured mesh of the rectangle surface ``s``: ``n`` = segments along x, y."""
+    for _, curve in gmsh.model.getBoundary([(2, s)], oriented=False):
+        a, b = gmsh.model.getBoundary([(1, curve)], oriented=False)
+        pa, pb = gmsh.model.getValue(0, a[1], []), gmsh.model.getValue(0, b[1], [])
+        axis = 0 if abs(pa[0] - pb[0]) > abs(pa[1] - pb[1]) else 1
+        gmsh.model.mesh.setTransfiniteCurve(curve, n[axis] + 1)
+    gmsh.model.mesh.setTransfiniteSurface(s)
+    if quads:
+        gmsh.model.mesh.setRecombine(2, s)
+
+
+def thick_cylinders(path: Path, r_i: float = 1.0, r_c: float = 2.0, r_o: float = 3.0,
+                    delta: float = 0.01, height: float = 0.5, n: tuple[int, int] = (16, 4),
+                    quads: bool = True, order: int = 1,
+                    comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Meridian sections (r = x, z = y) of two thick cylinders for a shrink fit: the inner
+    one ``[r_i, r_c + delta] x [0, height]`` overlaps the outer one ``[r_c, r_o] x [0,
+    height]`` by the radial interference ``delta`` (not fragmented: no shared nodes);
+    ``n`` = segments per cylinder along r and z, structured.
+
+    Groups: bodies ``inner``, ``outer``; edges ``inner_surface`` (r = r_c + delta),
+    ``outer_surface`` (r = r_c), ``inner_bottom``, ``inner_top``, ``outer_bottom``,
+    ``outer_top``.
+    """
+    def build():
+        occ = gmsh.model.occ
+        inner = occ.addRectangle(r_i, 0, 0, r_c + delta - r_i, height)
+        outer = occ.addRectangle(r_c, 0, 0, r_o - r_c, height)
+        occ.synchronize()
+        for s in (inner, outer):
+            _transfinite_rectangle(s, n, quads)
+        gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.setOrder(order)
+        group(2, [inner], "inner")
+        group(2, [outer], "outer")
+        group(1, boundary(2, inner, 0, r_c + delta), "inner_surface")
+        group(1, boundary(2, outer, 0, r_c), "outer_surface")
+        for s, name in ((inner, "inner"), (outer, "outer")):
+            group(1, boundary(2, s, 1, 0.0), f"{name}_bottom")
+            group(1, boundary(2, s, 1, height), f"{name}_top")
+    return write_model(build, path, comm)
+
+
+def sphere_section(path: Path, R: float = 10.0, h_contact: float = 0.12,
+                   h_far: float = 2.0, refine_radius: float = 1.8, order: int = 1,
+                   comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Meridian section (r = x, z = y) of the lower half of a sphere of radius ``R``,
+    centre ``(0, R)``: the quarter disk ``x >= 0, y <= R``, triangles of size ``h_contact``
+    within ``refine_radius`` of the pole (0, 0), growing to ``h_far`` 10 further out.
+
+    Groups: body ``sphere``; edges ``sphere_surface`` (the arc), ``sphere_top`` (y = R),
+    ``sphere_axis`` (x = 0).
+    """
+    def build():
+        occ = gmsh.model.occ
+        disk = occ.addDisk(0, R, 0, R, R)
+        box = occ.addRectangle(0, 0, 0, R, R)
+        (quarter,), _ = occ.intersect([(2, disk)], [(2, box)])
+        occ.synchronize()
+        s = quarter[1]
+        curves = [t for _, t in gmsh.model.getBoundary([quarter], oriented=False)]
+        centres = {c: occ.getCenterOfMass(1, c) for c in curves}
+        axis = [c for c in curves if abs(centres[c][0]) < 1e-9]
+        top = [c for c in curves if abs(centres[c][1] - R) < 1e-9]
+        arc = [c for c in curves if c not in axis + top]
+        pole = [t for _, t in gmsh.model.getEntitiesInBoundingBox(
+            -1e-6, -1e-6, -1e-6, 1e-6, 1e-6, 1e-6, 0)]
+        f = gmsh.model.mesh.field
+        dist = f.add("Distance")
+        f.setNumbers(dist, "PointsList", pole)
+        thr = f.add("Threshold")
+        f.setNumber(thr, "InField", dist)
+        for key, value in (("SizeMin", h_contact), ("SizeMax", h_far),
+                           ("DistMin", refine_radius), ("DistMax", refine_radius + 10.0)):
+            f.setNumber(thr, key, value)
+        f.setAsBackgroundMesh(thr)
+        for key in ("Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+                    "Mesh.MeshSizeFromCurvature"):
+            gmsh.option.setNumber(key, 0)
+        gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.setOrder(order)
+        group(2, [s], "sphere")
+        group(1, arc, "sphere_surface")
+        group(1, top, "sphere_top")
+        group(1, axis, "sphere_axis")
+    return write_model(build, path, comm)
+
+
+def ring_section(path: Path, R: float = 5.0, c: float = 1.0, h: float = 0.1,
+                 comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Meridian section (r = x, z = y) of the upper half of an O-ring: the half disk of
+    radius ``c`` (the cord) centred at ``(R, 0)``, ``y >= 0``, triangles of size ``h``.
+
+    Groups: body ``ring``; edges ``ring_surface`` (the arc), ``ring_equator`` (y = 0).
+    """
+    def build():
+        occ = gmsh.model.occ
+        disk = occ.addDisk(R, 0, 0, c, c)
+        box = occ.addRectangle(R - c, 0, 0, 2 * c, c)
+        (half,), _ = occ.intersect([(2, disk)], [(2, box)])
+        occ.synchronize()
+        curves = [t for _, t in gmsh.model.getBoundary([half], oriented=False)]
+        equator = [t for t in curves if abs(occ.getCenterOfMass(1, t)[1]) < 1e-9]
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.model.mesh.generate(2)
+        group(2, [half[1]], "ring")
+        group(1, [t for t in curves if t not in equator], "ring_surface")
+        group(1, equator, "ring_equator")
+    return write_model(build, path, comm)
 
 
 def blocks_on_foundation(path: Path, n_foundation: int = 5, n_block: int = 4,

@@ -7,6 +7,7 @@ from dolfinx_friction._lazy import lazy_names
 _PUBLIC = {
     "Scene": "model", "Body": "model", "Rigid": "model", "ContactPair": "model", "BC": "model",
     "Load": "model", "RigidMotion": "model", "Step": "model", "Output": "model",
+    "SolverSettings": "model",
     "SceneError": "validation", "ModelError": "validation", "load_scene": "toml",
     "parse_scene": "toml", "apply_override": "toml", "default_output_dir": "toml",
     "DiscreteScene": "build", "ContactProblem": "build", "Solver": "driver",

@@ -22,6 +22,7 @@ from petsc4py import PETSc
 from dolfinx_friction import _compat as compat
 
 from dolfinx_friction.io import gmsh as gmsh_io
+from dolfinx_friction.fem.axisymmetric import axisymmetric_grad, section_fault, section_weight
 from dolfinx_friction.fem.contact_fields import nodal_fields
 from dolfinx_friction.fem.materials import bulk_modulus, lame, out_of_plane
 from dolfinx_friction.fem.numbering import BodyField, make_fields
@@ -50,15 +51,39 @@ def _lame(body: Body, gdim: int) -> tuple[float, float]:
     return lame(body.E, body.nu, plane_stress=gdim == 2 and body.plane == "stress")
 
 
-def _thickness(field: BodyField) -> float:
-    return out_of_plane(field.body.thickness, field.gdim)
+def _thickness(field: BodyField):
+    """The weight of ``dx`` and ``ds``: a plane body's thickness, ``2 pi r`` (UFL) on an
+    axisymmetric body, 1 in 3D."""
+    return section_weight(field)
+
+
+def _grad(field: BodyField, w):
+    """``grad w``, the 3 x 3 :func:`~dolfinx_friction.fem.axisymmetric.axisymmetric_grad`
+    on an axisymmetric body."""
+    return axisymmetric_grad(w) if field.axisymmetric else ufl.grad(w)
+
+
+def _dx(field: BodyField) -> ufl.Measure:
+    """Gauss rules of degree 2k for a rational integrand (finite strain, or ``u_r / r``):
+    2 x 2 points on bilinear quadrilaterals, as CalculiX's CPE4 / CAX4 / C3D8."""
+    return ufl.dx(metadata={"quadrature_degree": 2 * compat.space_degree(field.V)})
 
 
 def elastic_forms(field: BodyField) -> tuple[ufl.Form, ufl.Form]:
     """Residual ``(sigma(u), eps(v)) t dx`` of small-strain linear elasticity and its
-    Jacobian (``t``: the thickness of a 2D body)."""
+    Jacobian (``t``: the thickness of a 2D body; ``2 pi r`` and the hoop strain
+    ``u_r / r`` on an axisymmetric one)."""
     lam, mu = _lame(field.body, field.gdim)
     v, du = ufl.TestFunction(field.V), ufl.TrialFunction(field.V)
+    if field.axisymmetric:
+        def eps3(w):
+            return ufl.sym(axisymmetric_grad(w))
+
+        def sigma3(w):
+            return lam * ufl.tr(eps3(w)) * ufl.Identity(3) + 2.0 * mu * eps3(w)
+        weight, dx = _thickness(field), _dx(field)
+        return (weight * ufl.inner(sigma3(field.u), eps3(v)) * dx,
+                weight * ufl.inner(sigma3(du), eps3(v)) * dx)
 
     def eps(w):
         return ufl.sym(ufl.grad(w))
@@ -70,9 +95,12 @@ def elastic_forms(field: BodyField) -> tuple[ufl.Form, ufl.Form]:
             t * ufl.inner(sigma(du), eps(v)) * ufl.dx)
 
 
-def deformation_gradient(u, gdim: int):
+def deformation_gradient(u, gdim: int, axisymmetric: bool = False):
     """``(F, F3)``: the deformation gradient as a UFL variable, and as 3 x 3 (plane strain
-    in 2D: ``F33 = 1``)."""
+    in 2D: ``F33 = 1``; axisymmetric: ``F_thetatheta = 1 + u_r / r``, and ``F`` is ``F3``)."""
+    if axisymmetric:
+        F = ufl.variable(ufl.Identity(3) + axisymmetric_grad(u))
+        return F, F
     F = ufl.variable(ufl.Identity(gdim) + ufl.grad(u))
     if gdim == 3:
         return F, F
@@ -100,8 +128,12 @@ def strain_energy(body: Body, F3):
 
 def cauchy_stress(field: BodyField):
     """The body's Cauchy stress as a 3 x 3 UFL tensor (plane strain in 2D: with the
-    out-of-plane normal stress)."""
+    out-of-plane normal stress; axisymmetric: (r, z, theta))."""
     body, d = field.body, field.gdim
+    if not body.finite_strain and field.axisymmetric:
+        lam, mu = _lame(body, d)
+        eps = ufl.sym(axisymmetric_grad(field.u))
+        return lam * ufl.tr(eps) * ufl.Identity(3) + 2.0 * mu * eps
     if not body.finite_strain:
         lam, mu = _lame(body, d)
         eps = ufl.sym(ufl.grad(field.u))
@@ -111,7 +143,7 @@ def cauchy_stress(field: BodyField):
         s33 = lam * ufl.tr(eps) if body.plane == "strain" else 0.0
         return ufl.as_matrix([[sigma[0, 0], sigma[0, 1], 0], [sigma[1, 0], sigma[1, 1], 0],
                               [0, 0, s33]])
-    F, F3 = deformation_gradient(field.u, d)
+    F, F3 = deformation_gradient(field.u, d, field.axisymmetric)
     F3v = ufl.variable(F3)
     P = ufl.diff(strain_energy(body, F3v), F3v)
     return P * F3.T / ufl.det(F3)
@@ -129,13 +161,11 @@ def body_forms(field: BodyField) -> tuple[ufl.Form, Optional[ufl.Form]]:
     model against the gradient of the test function (reference configuration)."""
     if not field.body.finite_strain:
         return elastic_forms(field)
-    F, F3 = deformation_gradient(field.u, field.gdim)
+    F, F3 = deformation_gradient(field.u, field.gdim, field.axisymmetric)
     P = ufl.diff(strain_energy(field.body, F3), F)
     v = ufl.TestFunction(field.V)
-    # UFL would estimate a high degree for the rational integrand: Gauss rules of degree
-    # 2k (2 x 2 points on bilinear quadrilaterals, as CalculiX's CPE4 / C3D8)
-    dx = ufl.dx(metadata={"quadrature_degree": 2 * compat.space_degree(field.V)})
-    return _thickness(field) * ufl.inner(P, ufl.grad(v)) * dx, None
+    # UFL would estimate a high degree for the rational integrand
+    return _thickness(field) * ufl.inner(P, _grad(field, v)) * _dx(field), None
 
 
 class DiscreteScene:
@@ -158,8 +188,14 @@ class DiscreteScene:
         fields, self.layout = make_fields(
             comm, [self.meshes.bodies[b.name] for b in scene.bodies], len(scene.rigids),
             degrees=[b.degree for b in scene.bodies],
-            thicknesses=[b.thickness for b in scene.bodies])
+            thicknesses=[b.thickness for b in scene.bodies],
+            axisymmetric=[b.axisymmetric for b in scene.bodies])
         self.fields = [SceneField.of(f, b) for f, b in zip(fields, scene.bodies)]
+        for i, f in enumerate(self.fields):
+            fault = section_fault(f) if f.axisymmetric else ""
+            if fault:
+                raise ModelError(f"body.{i}.plane = \"axisymmetric\": body {f.body.name!r}: "
+                                 f"{fault}")
         validation.check_solvable(scene)
         validation.check_held(scene, self.meshes.group_bodies)
         validation.check_bcs(scene, self.fields, self.meshes.group_bodies, comm)
@@ -212,7 +248,9 @@ class DiscreteScene:
                 sigma_inf=pair.sigma_inf, c0=pair.c0, E=body.E, mu=pair.mu,
                 stick_slope=pair.stick_slope, tangent=pair.tangent,
                 thickness=out_of_plane(body.thickness, self.gdim),
-                pairing_iterations=pair.pairing_iterations, name=f"{pair.slave}->{pair.master}",
+                axisymmetric=body.axisymmetric,
+                pairing_iterations=pair.pairing_iterations, method=pair.method,
+                augmented_tolerance=pair.augmented_tolerance, name=f"{pair.slave}->{pair.master}",
                 obstacle_index=index, n_obstacles=len(self.scene.rigids),
                 body_names=(body.name, pair.master))
         except ContactSetupError as error:  # e.g. a default K that overflows
@@ -272,14 +310,18 @@ class ContactProblem(DiscreteScene):
             tags, _ = field.mesh.meshtags(self.gdim - 1, [group])
             ds = ufl.Measure("ds", domain=field.V.mesh, subdomain_data=tags)(1)
             G = ufl.Identity(self.gdim) + ufl.grad(field.u)
+            # (axisymmetric: J = det F3 with the hoop stretch; in the meridian plane
+            # F3^-T is G^-T)
+            det = ufl.det(deformation_gradient(field.u, self.gdim, True)[1]) \
+                if field.axisymmetric else ufl.det(G)
             N, v = ufl.FacetNormal(field.V.mesh), ufl.TestFunction(field.V)
             # Nanson: n da = J F^-T N dA; the pressure pushes into the body
-            F += _thickness(field) * p * ufl.det(G) * ufl.inner(ufl.inv(G).T * N, v) * ds
+            F += _thickness(field) * p * det * ufl.inner(ufl.inv(G).T * N, v) * ds
         return F, J
 
     def _inversion_guard(self, field: BodyField):
         """A check that no quadrature point of a finite-strain body has ``det F <= 0``."""
-        _, F3 = deformation_gradient(field.u, self.gdim)
+        _, F3 = deformation_gradient(field.u, self.gdim, field.axisymmetric)
         degree = 2 * (field.body.degree or compat.geometry_degree(field.V.mesh))
         expression = compat.quadrature_expression(ufl.det(F3), field.V.mesh, degree)
 

@@ -20,9 +20,8 @@ from dolfinx_friction.nls.newton import Newton
 from dolfinx_friction.scene.build import ContactProblem
 from dolfinx_friction.scene.control import RunControl, checkpoint
 from dolfinx_friction.nls.stepping import IncrementRecord
-from dolfinx_friction.fem.block_problem import Timers
+from dolfinx_friction.fem.timers import Timers
 from dolfinx_friction.fem.loads import unit_loads
-from dolfinx_friction.fem.materials import out_of_plane
 
 
 @dataclass
@@ -124,7 +123,7 @@ class Solver:
         if group not in self._unit_loads:
             self._unit_loads[group] = [
                 (self.problem.layout.owned_slice(f.block, self.gdim),
-                 unit_loads(f, group, out_of_plane(f.body.thickness, self.gdim)), f)
+                 unit_loads(f, group), f)
                 for f in self.problem.group_fields(group)]
         return self._unit_loads[group]
 

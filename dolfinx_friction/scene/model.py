@@ -20,7 +20,7 @@ from dolfinx_friction.fem import contact_settings, obstacles
 from dolfinx_friction.fem.contact_settings import (  # noqa: F401  (re-exported)
     CALCULIX, LAWS, PENALTY_PER_SPACING, STICK_SLOPE_PER_SPACING, TANGENTS)
 from dolfinx_friction.fem.obstacles import SHAPES  # noqa: F401  (re-exported)
-from dolfinx_friction.nls.defaults import CONVERGENCE, STALL_ITERATIONS
+from dolfinx_friction.nls.defaults import CONVERGENCE, LINEAR_KINDS, STALL_ITERATIONS
 from dolfinx_friction.rules import Key, Rules, validate
 from dolfinx_friction.scene import validation as v
 
@@ -44,8 +44,10 @@ class Body:
     E: float
     nu: float
     degree: Optional[int] = None  # None: the geometry degree of the mesh
-    plane: str = "strain"  # 2D only: "strain" | "stress" (small strain only)
-    thickness: float = 1.0  # 2D only
+    #: 2D only: "strain" | "stress" (small strain only) | "axisymmetric" (a meridian
+    #: section, r = x >= 0, z = y: values per full revolution)
+    plane: str = "strain"
+    thickness: float = 1.0  # 2D only, not axisymmetric
     model: str = "linear"  # one of MODELS
 
     def __post_init__(self) -> None:
@@ -54,6 +56,10 @@ class Body:
     @property
     def finite_strain(self) -> bool:
         return self.model != "linear"
+
+    @property
+    def axisymmetric(self) -> bool:
+        return self.plane == "axisymmetric"
 
 
 @dataclass(frozen=True)
@@ -100,6 +106,10 @@ class ContactPair:
     #: Newton iterations per increment in which slave nodes are re-paired;
     #: later iterations keep the pairing frozen (CalculiX: 8).
     pairing_iterations: int = 8
+    #: "penalty" or "augmented" (Uzawa updates until the overclosure and the stick slip
+    #: are below ``augmented_tolerance`` times the slave node spacing)
+    method: str = "penalty"
+    augmented_tolerance: float = 1e-4
 
     def __post_init__(self) -> None:
         validate(self, RULES[ContactPair])
@@ -191,6 +201,24 @@ class Output:
 
 
 @dataclass(frozen=True)
+class SolverSettings:
+    """The linear solver of the Newton iterations (``[solver]``): ``linear`` ``"direct"``
+    (MUMPS), ``"iterative"`` (GMRES with algebraic multigrid) or ``"auto"`` (direct up to
+    ``direct_max_dofs`` unknowns, default by dimension:
+    :data:`~dolfinx_friction.nls.defaults.DIRECT_MAX_DOFS`); ``reuse_factorisation``
+    (None: where it pays); ``petsc_options`` over the chosen solver's, as ``(name, value)``
+    pairs (a dict is taken)."""
+
+    linear: str = "auto"
+    direct_max_dofs: Optional[int] = None
+    reuse_factorisation: Optional[bool] = None
+    petsc_options: tuple[tuple[str, object], ...] = ()
+
+    def __post_init__(self) -> None:
+        validate(self, RULES[SolverSettings])
+
+
+@dataclass(frozen=True)
 class Scene:
     """A whole analysis: mesh, bodies, obstacles, contact pairs, steps, output."""
 
@@ -200,6 +228,7 @@ class Scene:
     contacts: tuple[ContactPair, ...] = ()
     rigids: tuple[Rigid, ...] = ()
     output: Output = field(default_factory=Output)
+    solver: SolverSettings = field(default_factory=SolverSettings)
     title: str = ""
     source: Optional[Path] = None  # the scene file, if read from one
     overrides: tuple[str, ...] = ()  # the ``--set KEY=VALUE`` applied to the file, as given
@@ -237,10 +266,10 @@ RULES: dict[type, Rules] = {
         "E": Key(v.modulus, required=True),
         "nu": Key(v.number(gt=-1, lt=0.5), required=True),
         "degree": Key(v.one_of(1, 2)),
-        "plane": Key(v.one_of("strain", "stress")),
+        "plane": Key(v.one_of("strain", "stress", "axisymmetric")),
         "thickness": Key(v.number(gt=0)),
         "model": Key(v.one_of(*MODELS)),
-    }),
+    }, (v.check_body,)),
     Rigid: obstacles.RULES,
     ContactPair: Rules("contact", {
         "slave": Key(v.name, required=True),
@@ -284,6 +313,12 @@ RULES: dict[type, Rules] = {
         "fields": Key(v.boolean),
         "contact_table": Key(v.boolean),
     }),
+    SolverSettings: Rules("solver", {
+        "linear": Key(v.one_of(*LINEAR_KINDS)),
+        "direct_max_dofs": Key(v.integer(0, 10**12)),
+        "reuse_factorisation": Key(v.boolean),
+        "petsc_options": Key(v.petsc_options),
+    }),
     Scene: Rules("", {
         "title": Key(v.string),
         "mesh": Key(v.mesh_source, required=True),
@@ -292,5 +327,6 @@ RULES: dict[type, Rules] = {
         "contact": Key(v.items(ContactPair), field="contacts"),
         "step": Key(v.items(Step, min_length=1), required=True, field="steps"),
         "output": Key(v.instance(Output)),
+        "solver": Key(v.instance(SolverSettings)),
     }, (v.check_scene,)),
 }

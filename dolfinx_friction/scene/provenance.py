@@ -14,6 +14,7 @@ from typing import Optional
 from dolfinx_friction import __version__
 
 from dolfinx_friction import _compat as compat
+from dolfinx_friction.nls.defaults import choose
 from dolfinx_friction.nls.linear import LinearSolver
 from dolfinx_friction.scene.build import ContactProblem
 
@@ -55,6 +56,10 @@ def resolved_scene(problem: ContactProblem, reaction_groups: list[str],
         "steps": [asdict(s) for s in scene.steps],
         "output": {"reactions": list(reaction_groups), "fields": scene.output.fields,
                    "contact_table": scene.output.contact_table},
+        "solver": {**asdict(scene.solver), "petsc_options": dict(scene.solver.petsc_options),
+                   "dofs": problem.system.x.getSize(),
+                   "chosen": choose(scene.solver.linear, problem.system.x.getSize(),
+                                    problem.gdim, scene.solver.direct_max_dofs)},
         "linear_solver": linear.settings() if linear is not None else None,
     }
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import logging
+import resource
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -9,6 +10,7 @@ from typing import Callable, Optional, Sequence, Union
 
 from mpi4py import MPI
 
+from dolfinx_friction.nls.defaults import ITERATIVE, choose
 from dolfinx_friction.scene.model import Scene
 from dolfinx_friction.io.writer import ResultWriter
 from dolfinx_friction.scene.build import ContactProblem
@@ -33,6 +35,28 @@ class RunResult:
     summary: RunSummary
     increments: list[Increment]
     directory: Optional[Path]
+
+
+def peak_memory_mib() -> float:
+    """This process's peak resident memory so far [MiB] (Linux: ``ru_maxrss`` in KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def linear_solver(problem: ContactProblem, petsc_options: Optional[dict],
+                  reuse: Optional[bool]) -> tuple[Optional[dict], Optional[bool]]:
+    """The linear solver's options and ``reuse_factorisation`` for ``problem``: those given
+    to :func:`run`, else the scene's ``[solver]`` (``"auto"`` chooses by the number of
+    unknowns, :func:`~dolfinx_friction.nls.defaults.choose`); None: MUMPS, as the solver
+    decides."""
+    settings = problem.scene.solver
+    if reuse is None:
+        reuse = settings.reuse_factorisation
+    if petsc_options is not None:
+        return petsc_options, reuse
+    kind = choose(settings.linear, problem.system.x.getSize(), problem.gdim,
+                  settings.direct_max_dofs)
+    options = {**(ITERATIVE if kind == "iterative" else {}), **dict(settings.petsc_options)}
+    return options or None, reuse
 
 
 def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
@@ -65,6 +89,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         raise SceneError("overrides apply to a scene file; change a Scene object with "
                          "dataclasses.replace", key="overrides")
     problem = ContactProblem(scene, comm)
+    petsc_options, reuse_factorisation = linear_solver(problem, petsc_options,
+                                                       reuse_factorisation)
     solver = Solver(problem, petsc_options=petsc_options,
                     reuse_factorisation=reuse_factorisation)
     directory = Path(out) if out is not None else (scene.output.dir or default_output_dir(scene))
@@ -109,10 +135,16 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
             progress(inc)
 
     def extra() -> dict:  # summary.json beyond the counts: what was run, and the warnings
+        peak = comm.allreduce(peak_memory_mib(), op=MPI.MAX)
         if comm.rank != 0:
             return {}
-        return {**provenance(problem, solver.reaction_groups(), solver.linear),
-                "warnings": list(warnings.values())}
+        linear = solver.linear
+        return {**provenance(problem, solver.reaction_groups(), linear),
+                "linear_solves": None if linear is None else {
+                    "preconditioner_setups": linear.factorisations,
+                    "krylov_iterations": linear.krylov_iterations,
+                    "condensed_solves": linear.condensed_solves},
+                "peak_memory_mib": peak, "warnings": list(warnings.values())}
 
     try:
         summary = solver.run(record, control)

@@ -33,6 +33,7 @@ from dolfinx_friction.scene.model import (
     Rigid,
     RigidMotion,
     Scene,
+    SolverSettings,
     Step,
 )
 from dolfinx_friction.scene.validation import (
@@ -125,6 +126,7 @@ _SCENE_TABLES = {
     "contact": _array(_record(ContactPair)),
     "step": _array(_step, min_length=1),
     "output": _record(Output),
+    "solver": _record(SolverSettings),
 }
 
 

@@ -40,6 +40,7 @@ from dolfinx_friction.rules import (  # noqa: F401  (the engine, re-exported)
     one_of, penalty, place, rotation, show, string, suggest, validate, vector)
 from dolfinx_friction.rules import _list_of_2_or_3  # noqa: F401
 from dolfinx_friction.io.files import file_fault
+from dolfinx_friction.nls.defaults import unsafe_option
 
 
 class ModelError(ValueError):
@@ -103,6 +104,31 @@ def items(cls: type, min_length: int = 0) -> Check:
     return check
 
 
+def petsc_options(value: Any, key: str) -> tuple[tuple[str, Any], ...]:
+    """PETSc options without their dash (``{ksp_type = "cg", ksp_rtol = 1e-8}``): names of
+    letters, digits and underscores; values strings, numbers or booleans; none that would
+    run code or write a file (:func:`~dolfinx_friction.nls.defaults.unsafe_option`).
+    Kept as sorted ``(name, value)`` pairs (which it takes as well)."""
+    if isinstance(value, (tuple, list)) and all(isinstance(p, tuple) and len(p) == 2
+                                                for p in value):
+        value = dict(value)
+    if not isinstance(value, Mapping):
+        fail(key, "must be a table of PETSc options (name = value)", value)
+    for option, setting in value.items():
+        at = join(key, option)
+        if not (isinstance(option, str) and option.replace("_", "").isalnum()
+                and option[:1].isalpha()):
+            fail(at, "must be a PETSc option name without its dash (letters, digits, _)")
+        if isinstance(setting, float):
+            number()(setting, at)
+        elif not isinstance(setting, (str, int, bool)):
+            fail(at, "must be a string, a number or true/false", setting)
+        why = unsafe_option(option, setting)
+        if why:
+            fail(at, f"is not allowed: it {why}", setting)
+    return tuple(sorted(value.items()))
+
+
 def instance(cls: type) -> Check:
     def check(value: Any, key: str) -> Any:
         if not isinstance(value, cls):
@@ -127,6 +153,12 @@ def _check_once_per_step(entries: Sequence[Any], key: str, attr: str) -> None:
             fail(join(join(key, j), attr), f"already given in this step by "
                  f"{join(key, first[name_])}", name_)
         first[name_] = j
+
+
+def check_body(body: Any, key: str) -> None:
+    if body.plane == "axisymmetric" and body.thickness != 1.0:
+        fail(join(key, "thickness"), "does not apply to an axisymmetric body (its values "
+             "are per full revolution)", body.thickness)
 
 
 def check_step(step: Any, key: str) -> None:
@@ -173,6 +205,11 @@ def _check_rigid_motions(scene: Any) -> None:
             if motion.name not in rigids:
                 fail(f"step.{i}.rigid.{j}.name", "no [[rigid]] of that name"
                      + suggest(motion.name, rigids), motion.name)
+            if (motion.rotation is not None and any(motion.rotation)
+                    and any(b.axisymmetric for b in scene.bodies)):
+                fail(f"step.{i}.rigid.{j}.rotation", "an obstacle of an axisymmetric scene "
+                     "cannot turn (a turn in the meridian section is no axisymmetric motion)",
+                     list(motion.rotation))
 
 
 def _vectors(scene: Any) -> Iterator[tuple[str, tuple]]:
@@ -316,7 +353,10 @@ def check_groups(scene: Any, meshes: Any) -> None:
         key, v = wrong[0]
         raise ModelError(f"{key} has {len(v)} components, but the mesh {scene.mesh} is "
                          f"{gdim}D (every vector has the mesh dimension)")
-    for b in scene.bodies:
+    for i, b in enumerate(scene.bodies):
+        if gdim == 3 and b.axisymmetric:
+            raise ModelError(f"body.{i}.plane = \"axisymmetric\": body {b.name!r} needs a "
+                             f"2D mesh (a meridian section), the mesh {scene.mesh} is 3D")
         if gdim == 3 and (b.plane != "strain" or b.thickness != 1.0):
             raise ModelError(f"body {b.name!r}: plane/thickness apply to 2D meshes only")
 

@@ -664,7 +664,7 @@ CONTACT_3D = ["step", "increment", "node", "x", "y", "z", "gap", "pressure", "no
 SUMMARY_KEYS = {"scene", "scene_sha256", "scene_file_sha256", "title", "overrides",
                 "package_version", "resolved", "versions", "mpi_ranks", "dofs", "slave_nodes",
                 "increments", "cutbacks", "newton_iterations", "wall_time_s",
-                "wall_time_per_phase_s", "converged"}
+                "wall_time_per_phase_s", "converged", "linear_solves", "peak_memory_mib"}
 PHASES = {"setup", "contact_search", "contact_assembly", "bulk_assembly", "linear_solve",
           "output"}
 

@@ -26,6 +26,7 @@ from dolfinx_friction.scene.model import (
     Load,
     Output,
     Rigid,
+    SolverSettings,
     RigidMotion,
     Scene,
     Step,
@@ -396,6 +397,21 @@ def test_cylinder_and_tabular(tmp_path):
     assert scene.contacts[0].c0 == 2e-3  # the cutoff factor applies to every law
 
 
+def test_solver_table(tmp_path):
+    """``[solver]``: absent, the defaults ("auto"); given, its keys and PETSc options (kept
+    sorted, as pairs); ``--set`` reaches it like any table."""
+    assert load_scene(write(tmp_path, EXAMPLE)).solver == SolverSettings()
+    data = edited("example", put("solver", {
+        "linear": "iterative", "direct_max_dofs": 5000, "reuse_factorisation": False,
+        "petsc_options": {"pc_type": "hypre", "ksp_rtol": 1e-8,
+                          "ksp_norm_type": "unpreconditioned"}}))
+    solver = load_scene(write(tmp_path, to_toml(data))).solver
+    assert solver == SolverSettings("iterative", 5000, False, (
+        ("ksp_norm_type", "unpreconditioned"), ("ksp_rtol", 1e-8), ("pc_type", "hypre")))
+    path = write(tmp_path, EXAMPLE)
+    assert load_scene(path, ["solver.linear=direct"]).solver.linear == "direct"
+
+
 def test_parse_scene_without_source_keeps_paths():
     scene = parse_scene(edited("rigid2d"))
     assert scene.mesh == Path("disk.MSH")
@@ -692,6 +708,34 @@ BAD = [
      ["rigid.0.reference: has 2 components"]),
     ("reference-nan", "rigid2d", [put("rigid.0.reference", [math.nan, 0.0])],
      ["rigid.0.reference.0 = nan", "finite"]),
+    ("rotation-axisymmetric", "rigid2d", [put("body.0.plane", "axisymmetric"),
+                                          drop("body.0.thickness"),
+                                          append("step.0.rigid", {"name": "floor", "displacement":
+                                                                  [0, 0], "rotation": 0.1})],
+     ["step.0.rigid.0.rotation = [0.1]", "axisymmetric scene cannot turn"]),
+    ("contact-method-unknown", "example", [put("contact.0.method", "lagrange")],
+     ['contact.0.method = "lagrange"', '"penalty", "augmented"']),
+    ("augmented-tolerance-one", "example", [put("contact.0.augmented_tolerance", 1.0)],
+     ["contact.0.augmented_tolerance = 1.0", "< 1"]),
+    # [solver]: the linear solver; input files never run code nor choose files to write
+    ("solver-unknown-kind", "example", [put("solver", {"linear": "cholesky"})],
+     ['solver.linear = "cholesky"', '"auto", "direct", "iterative"']),
+    ("solver-unknown-key", "example", [put("solver", {"kind": "direct"})],
+     ["solver.kind", "unknown key"]),
+    ("solver-negative-limit", "example", [put("solver", {"direct_max_dofs": -1})],
+     ["solver.direct_max_dofs = -1"]),
+    ("solver-options-not-a-table", "example", [put("solver", {"petsc_options": "-ksp_type cg"})],
+     ["solver.petsc_options", "table of PETSc options"]),
+    ("solver-option-with-dash", "example", [put("solver", {"petsc_options": {"-ksp_type": "cg"}})],
+     ["solver.petsc_options.-ksp_type", "without its dash"]),
+    ("solver-option-python", "example",
+     [put("solver", {"petsc_options": {"pc_type": "python", "pc_python_type": "m.C"}})],
+     ["solver.petsc_options.pc_", "would load Python code"]),
+    ("solver-option-view-file", "example",
+     [put("solver", {"petsc_options": {"ksp_view": "ascii:/etc/motd"}})],
+     ["solver.petsc_options.ksp_view", "would write a file"]),
+    ("solver-option-list", "example", [put("solver", {"petsc_options": {"ksp_rtol": [1e-8]}})],
+     ["solver.petsc_options.ksp_rtol", "string, a number or true/false"]),
 ]
 
 

@@ -87,6 +87,34 @@ def test_snes_idiom_gives_the_block_problems_answer():
     assert abs(f[0] / f[1]) > 0.1  # the slide reached friction
 
 
+@needs_snes
+def test_augmented_contacts_are_solved_again_until_their_overclosure_is_gone():
+    """``method="augmented"``: SNESContact.solve updates the multipliers and solves again
+    until the overclosure is below 1e-4 of the spacing (the penalty leaves 1e-2 here), in
+    every increment of the press and slide; each increment is committed once."""
+    V, tags, u, F, held = block()
+    plane = rigid_plane([0.0, 0.0], [0.0, 1.0])
+    penalty = NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=0.3)
+    problem = NonlinearProblem(F, u, bcs=[held], petsc_options_prefix="test_penalty_",
+                               petsc_options=OPTIONS)
+    contact = add_contact(problem, [penalty], bcs=[held])
+    penalty.obstacle_translation = LOADS[0]
+    assert contact.solve() > 0 and penalty.penetration() > 1e-3
+    del contact
+    V, tags, u, F, held = block()
+    pair = NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=0.3, method="augmented")
+    problem = NonlinearProblem(F, u, bcs=[held], petsc_options_prefix="test_augmented_",
+                               petsc_options=OPTIONS)
+    log = Counter()
+    contact = add_contact(problem, [pair], bcs=[held], history=[log])
+    for load in LOADS:
+        pair.obstacle_translation = load
+        assert contact.solve() > 0
+        assert pair.penetration() <= 1e-4
+        assert not pair.augment()  # nothing left to update
+    assert (log.commits, log.rollbacks) == (len(LOADS), 0)
+
+
 def two_bodies():
     """A Neo-Hookean block (quadrilaterals) pressed by its top onto a Neo-Hookean
     foundation (triangles, held at its bottom) and dragged: the residuals, unknowns,

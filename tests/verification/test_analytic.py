@@ -31,6 +31,19 @@ def test_incline_push_ratio():
     assert H / V == pytest.approx(incline_push_ratio(0.1, 0.3), rel=1e-3)
 
 
+@pytest.mark.parametrize("method", ["penalty", "augmented"])
+def test_incline_push_ratio_to_a_hundredth_of_a_percent(method):
+    """The CGS-4-like incline to 0.01 %: without the tension plateau (sigma_inf = 1e-5:
+    the lifted heel nodes pull no more) H/V is the closed form's with either method
+    (measured +1.1e-6 penalty, +1.9e-6 augmented)."""
+    result = run(DEMOS / "incline.toml", write=False,
+                 overrides=["contact.0.sigma_inf=1e-5", f"contact.0.method={method}"])
+    last = result.increments[-1]
+    assert last.slipping == last.active > 0
+    H, V = last.reactions["block_top"][0], 100.0
+    assert H / V == pytest.approx(incline_push_ratio(0.1, 0.3), rel=1e-4)
+
+
 def test_hertz_cylinder():
     """2D plane strain, quarter model: p0 within 2 %, a within 3 % (measured +1.9 %, -0.5 %)."""
     result = run(DEMOS / "hertz_cylinder.toml", write=False)
@@ -41,6 +54,32 @@ def test_hertz_cylinder():
     a_fit, p0_fit = fit_elliptic(st["X"][closed, 0], st["pressure"][closed])
     assert p0_fit == pytest.approx(p0, rel=0.02)
     assert a_fit == pytest.approx(a, rel=0.03)
+
+
+def _hertz_cylinder_fit(*overrides: str) -> tuple[float, float, list]:
+    """The fitted p0 and a of the Hertz cylinder demo with ``overrides``, and every
+    increment's largest overclosure per slave node spacing."""
+    result = run(DEMOS / "hertz_cylinder.toml", write=False, overrides=list(overrides))
+    st = contact_state(result)
+    closed = st["status"] != 0
+    a_fit, p0_fit = fit_elliptic(st["X"][closed, 0], st["pressure"][closed])
+    return p0_fit, a_fit, [max(inc.penetration.values()) for inc in result.increments]
+
+
+def test_hertz_cylinder_augmented_lagrangian_reaches_the_stiff_penalty_limit():
+    """``method = "augmented"`` at the default K: every increment ends with the
+    overclosure below its tolerance (1e-4 of the slave node spacing; penalty: 7e-3), and
+    the fitted p0 and a are those of the penalty method at K x 100 (7e-5 of the spacing)
+    on the same mesh (measured 0.02 % and 0.01 %; the default penalty is 0.10 % and 0.02 %
+    off), so within 0.1 %; with a tolerance of 1e-6, to 0.005 %."""
+    p0_stiff, a_stiff, _ = _hertz_cylinder_fit("contact.0.K=2.05e7")
+    p0, a, penetration = _hertz_cylinder_fit("contact.0.method=augmented")
+    assert max(penetration) <= 1e-4
+    assert p0 == pytest.approx(p0_stiff, rel=1e-3) and a == pytest.approx(a_stiff, rel=1e-3)
+    p0, a, penetration = _hertz_cylinder_fit("contact.0.method=augmented",
+                                             "contact.0.augmented_tolerance=1e-6")
+    assert max(penetration) <= 1e-6
+    assert p0 == pytest.approx(p0_stiff, rel=5e-5) and a == pytest.approx(a_stiff, rel=5e-5)
 
 
 def test_hertz_sphere_on_rigid_plane():

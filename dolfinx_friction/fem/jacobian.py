@@ -1,0 +1,292 @@
+"""The Jacobian of a :class:`~dolfinx_friction.fem.block_problem.BlockProblem`: the matrix
+and the caches that make filling it again cheap.
+
+The bodies' Jacobians are joined in one COO pattern (:class:`~dolfinx_friction.fem.pattern.
+CooPattern`) in the block numbering; each search that changes the contact couplings extends
+it to a new matrix, which carries the block size and the bodies' rigid-body modes as near
+null space (for algebraic multigrid).  Filling the matrix at an iterate writes the bulk
+values (assembled once for linear bodies), the constrained rows (and, for a symmetric
+solve, columns) as identity, and the contacts' tangents over it; every cache is kept while
+the very objects it was made from (pattern, values, constrained rows) are the same.
+:meth:`BlockJacobian.split` gives the Jacobian as a constant bulk matrix plus the contact
+entries instead (:class:`JacobianSplit`, for the condensed solve).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Optional
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx_friction import _compat as compat
+from dolfinx_friction.fem.pattern import CooPattern
+
+if TYPE_CHECKING:
+    from dolfinx_friction.fem.block_problem import BlockProblem
+
+__all__ = ["BlockJacobian", "JacobianSplit"]
+
+
+@dataclass
+class JacobianSplit:
+    """The Jacobian ``J = K + C`` (serial): ``bulk`` is ``K``, the bodies' constant
+    stiffness with the constrained rows made identity rows (a PETSc matrix, the same object
+    while it does not change); ``C``, the contact tangent (zero in constrained rows), is the
+    sum of the ``values`` at ``(rows, cols)`` (repeated pairs add), all within the contact
+    surfaces' ``dofs`` (sorted).  With ``symmetric`` (``K`` is), the constrained columns
+    are zero in both: ``J`` is ``jacobian(x, symmetric=True)``."""
+
+    bulk: PETSc.Mat
+    dofs: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    values: np.ndarray
+    symmetric: bool = False
+
+
+def _same(kept: tuple, key: tuple) -> bool:
+    """Whether a cache's key holds the very objects of ``key`` (identity, not equality)."""
+    return all(a is b for a, b in zip(kept, key))
+
+
+class BlockJacobian:
+    """The Jacobian matrix of ``problem`` and its caches (collective where it assembles).
+
+    On construction the bodies' Jacobians are assembled at their current displacement (a
+    linear body's values are kept for the run) and :attr:`base`, their pattern, is made;
+    :attr:`K_linear` is the stiffness of the bodies whose residual is ``K u`` (None if
+    there are none).
+    """
+
+    def __init__(self, problem: BlockProblem, homogeneous: list[int]):
+        self.problem = problem
+        self.base, values = self._bulk_pattern()
+        #: each linear body's values in :attr:`base`
+        self.linear_data = {k: self.base.gather_values(k, values[k])
+                            for k, body in enumerate(problem.bodies) if body.linear}
+        self.K_linear: Optional[PETSc.Mat] = None
+        if homogeneous:
+            self.K_linear = self.base.create_matrix()
+            self.base.fill(self.K_linear, sum(self.linear_data[k] for k in homogeneous))
+        self._pattern: Optional[CooPattern] = None
+        self._versions: Optional[list[int]] = None
+        self._J: Optional[PETSc.Mat] = None
+        self._abs: Optional[PETSc.Mat] = None  # |J_bulk|, for the round-off floor
+        self._abs_data: Optional[np.ndarray] = None
+        self._bulk_data: Optional[np.ndarray] = None  # bulk Jacobian values (last, or constant)
+        self._zeroed: Optional[tuple] = None  # (key, slots of the constrained rows, columns)
+        self._static: Optional[tuple] = None  # (key, free obstacle rows, Jacobian without contact)
+        self._coupling_slots: Optional[tuple] = None  # (key, contacts' slots, zeroed ones)
+        self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
+        self._surface_dofs: Optional[np.ndarray] = None  # of all contacts (fixed in serial)
+        self._modes: Optional[PETSc.NullSpace] = None
+        self._spring = 0.0
+
+    def _bulk_pattern(self) -> tuple[CooPattern, list[np.ndarray]]:
+        """The pattern of the bodies' Jacobians in the block numbering, and each body's
+        CSR values at its current ``u`` (assembled once for both)."""
+        p = self.problem
+        d = p.gdim
+        blocks, values = [], []
+        for k, body in enumerate(p.bodies):
+            compat.assemble_matrix_into(body.A, body.J)  # a new matrix: zero before
+            indptr, cols, data = body.A.getValuesCSR()
+            values.append(data)
+            rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+            cols = cols.astype(np.int64)
+            blocks.append((p.layout.nodes(k)[rows // d] * d + rows % d,
+                           p.layout.from_block_global(k, cols // d) * d + cols % d))
+        return CooPattern(p.comm, p.layout.n_owned * d, blocks), values
+
+    def scale_of_bulk(self, x: PETSc.Vec, scale: PETSc.Vec) -> None:
+        """``|J_bulk| |x| + |f_ext|`` into the round-off scale (contacts add theirs); a
+        nonlinear body's ``J`` is the one of the last :meth:`jacobian`."""
+        if self._abs is None or self._abs_data is not self._bulk_data:
+            if self._bulk_data is None:
+                self._bulk_data = self.bulk_values()
+            if self._abs is None:
+                self._abs = self.base.create_matrix()
+            self.base.fill(self._abs, np.abs(self._bulk_data))
+            self._abs_data = self._bulk_data
+        ax = x.copy()
+        ax.abs()
+        self._abs.mult(ax, scale)
+        ax.destroy()
+        scale.setArray(scale.getArray() + np.abs(self.problem.f_ext))
+
+    def bulk_values(self) -> np.ndarray:
+        """Values of the bodies' Jacobians at their current ``u``, in the bulk pattern."""
+        base = np.zeros(self.base.nnz)
+        for k, body in enumerate(self.problem.bodies):
+            base += (self.linear_data[k] if body.linear
+                     else self.base.gather_values(k, body.jacobian_values()))
+        return base
+
+    def matrix(self) -> PETSc.Mat:
+        """The Jacobian matrix for the current contact couplings (a new one when they
+        changed since the last call; collective).  It carries the block size and the
+        bodies' rigid-body modes as near null space (for algebraic multigrid)."""
+        p = self.problem
+        versions = [c.couplings_version for c in p.contacts]
+        if self._J is None or versions != self._versions:
+            self._pattern = self.base.extended([c.couplings() for c in p.contacts])
+            if self._J is not None:
+                self._J.destroy()
+            self._J = self._pattern.create_matrix(p.gdim)
+            self._J.setNearNullSpace(self.rigid_body_modes())
+            for c in p.contacts:
+                c.register_matrix(self._J)
+            self._versions = versions
+        return self._J
+
+    def jacobian(self, x: PETSc.Vec, A: Optional[PETSc.Mat] = None,
+                 symmetric: bool = False) -> PETSc.Mat:
+        """Fill the Jacobian at ``x`` (the contacts at their last update) into ``A``
+        (default :meth:`matrix`); returns it.  ``symmetric``: the constrained columns are
+        zeroed too (symmetric where :attr:`symmetric`); a Newton step is the same, since the
+        residual is zero in the constrained rows."""
+        p = self.problem
+        with p.timers.measure("bulk_assembly"):
+            A = self.matrix() if A is None else A
+            if not p.linear:
+                p.scatter(x)
+            if self._bulk_data is None or not p.linear:
+                self._bulk_data = self.bulk_values()
+            base = self._bulk_data
+        with p.timers.measure("contact_assembly"):
+            static = self._static_values(base, symmetric)
+            slots, values = self._contact_values(static, symmetric)
+            self._pattern.fill_over(A, static, slots, values)
+        return A
+
+    def _static_values(self, base: np.ndarray, symmetric: bool) -> np.ndarray:
+        """CSR data (pattern of :meth:`matrix`) of the Jacobian without contact: the bulk
+        ``base``, the constrained rows (``symmetric``: and columns) zero but for a unit
+        diagonal, the obstacles' springs.  Kept while pattern, ``base`` and rows are the
+        same objects and the free obstacle rows the same (linear bodies: once per search)."""
+        p = self.problem
+        rows, free = p.constrained_rows, p.free_obstacle_rows()
+        key = (self._pattern, base, rows, symmetric)
+        cached = self._static
+        if cached is not None and _same(cached[0], key) and np.array_equal(cached[1], free):
+            return cached[2]
+        data = self._pattern.from_base(base)
+        data[self._zeroed_slots(rows, symmetric)] = 0.0
+        # A force-controlled obstacle may have no stiffness along some axis (a
+        # frictionless plane in its own plane): a tiny spring in the Jacobian only keeps
+        # it regular; the residual, hence the solution, is unchanged.
+        data[self._pattern.diagonal_slots[free]] += self._rigid_spring(base)
+        data[self._pattern.diagonal_slots[rows]] = 1.0
+        self._static = (key, free, data)
+        return data
+
+    def _zeroed_slots(self, rows: np.ndarray, symmetric: bool) -> np.ndarray:
+        """CSR slots of the constrained ``rows`` (``symmetric``: and of their columns on
+        every rank; collective), kept with the pattern and the rows."""
+        key = (self._pattern, rows, symmetric)
+        cached = self._zeroed
+        if cached is None or not _same(cached[0], key):
+            columns = (np.concatenate(self.problem.comm.allgather(self.global_rows(rows)))
+                       if symmetric else None)
+            self._zeroed = cached = (key, self._pattern.row_slots(rows, columns))
+        return cached[1]
+
+    def _contact_values(self, static: np.ndarray, symmetric: bool
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """The slots of the contacts' couplings (kept with the pattern) and the Jacobian's
+        values there: ``static`` plus the contacts' tangents, but in the constrained rows
+        (``symmetric``: and columns)."""
+        p = self.problem
+        rows = p.constrained_rows
+        gathered = [self._pattern.gather_slots(k, c.coupling_values())
+                    for k, c in enumerate(p.contacts)]
+        key = (self._pattern, rows, symmetric)
+        cached = self._coupling_slots
+        if cached is None or not _same(cached[0], key):
+            slots = np.unique(np.concatenate([at for at, _ in gathered]
+                                             + [np.zeros(0, np.int64)]))
+            zeroed = np.isin(slots, self._zeroed_slots(rows, symmetric))
+            self._coupling_slots = cached = (key, slots, zeroed)
+        _, slots, zeroed = cached
+        contact = np.zeros(len(slots))
+        for at, sums in gathered:
+            contact[np.searchsorted(slots, at)] += sums
+        contact[zeroed] = 0.0
+        return slots, static[slots] + contact
+
+    def global_rows(self, rows: np.ndarray) -> np.ndarray:
+        """Global indices of owned local rows."""
+        return (rows + self.problem.x.getOwnershipRange()[0]).astype(PETSc.IntType)
+
+    def split(self) -> Optional["JacobianSplit"]:
+        """The Jacobian at the contacts' last update as a constant bulk matrix plus a
+        contact part supported on the contact surfaces (no matrix is filled), or None where
+        that split does not hold or is not implemented: a body that is not linear, rigid
+        obstacles (their rows have no bulk stiffness), several ranks (the contact entries
+        and dofs are local indices)."""
+        p = self.problem
+        if not p.linear or p.n_obstacles or p.comm.size > 1 or not p.contacts:
+            return None
+        rows = p.constrained_rows
+        with p.timers.measure("bulk_assembly"):
+            if self._bulk_bc is None or self._bulk_bc[0] is not rows:
+                if self._bulk_bc is not None:
+                    self._bulk_bc[1].destroy()
+                data = (self.bulk_values() if self._bulk_data is None
+                        else self._bulk_data.copy())
+                data[self.base.row_slots(rows)] = 0.0
+                data[self.base.diagonal_slots[rows]] = 1.0
+                K = self.base.create_matrix(p.gdim)
+                self.base.fill(K, data)
+                if p.bodies_symmetric():
+                    K.zeroRowsColumns(self.global_rows(rows), diag=1.0)
+                self._bulk_bc = (rows, K)
+        with p.timers.measure("contact_assembly"):
+            free = np.ones(p.layout.n_owned * p.gdim, bool)
+            free[rows] = False
+            entries = [c.element_entries() for c in p.contacts]
+            r, k, v = (np.concatenate(e) for e in zip(*entries))
+            keep = (v != 0.0) & free[r]
+            if p.bodies_symmetric():  # the constrained columns eliminated, as in K
+                keep &= free[k]
+            if self._surface_dofs is None:
+                self._surface_dofs = np.unique(np.concatenate(
+                    [c.surface_dofs() for c in p.contacts]))
+        return JacobianSplit(self._bulk_bc[1], self._surface_dofs, r[keep], k[keep], v[keep],
+                             p.bodies_symmetric())
+
+    def _rigid_spring(self, base: np.ndarray) -> float:
+        """1e-12 of the largest bulk diagonal entry (found once)."""
+        p = self.problem
+        if not self._spring and p.n_obstacles:
+            diagonal = np.abs(base[self.base.diagonal_slots])
+            self._spring = 1e-12 * p.comm.allreduce(float(diagonal.max(initial=0.0)),
+                                                       op=MPI.MAX)
+        return self._spring
+
+    def rigid_body_modes(self) -> PETSc.NullSpace:
+        """Translations and rotations of every body, orthonormal (collective): the near null
+        space of elasticity for algebraic multigrid.  An obstacle only translates."""
+        p = self.problem
+        if self._modes is not None:
+            return self._modes
+        d = p.gdim
+        modes = [p.x.duplicate() for _ in range(3 if d == 2 else 6)]
+        values = np.zeros((len(modes), p.x.getLocalSize() // d, d))
+        for k, V in enumerate(p.spaces):
+            nodes = slice(int(p.layout.block_offsets[k]), int(p.layout.block_offsets[k + 1]))
+            X = V.tabulate_dof_coordinates()[: V.dofmap.index_map.size_local, :d]
+            values[:d, nodes] = np.eye(d)[:, None, :]
+            for j, (a, c) in enumerate([(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]):
+                values[d + j, nodes, a], values[d + j, nodes, c] = -X[:, c], X[:, a]
+        for k in range(p.n_obstacles):
+            values[:d, p.obstacle_rows(k)[:1] // d] = np.eye(d)[:, None, :]
+        for k, mode in enumerate(modes):  # modified Gram-Schmidt
+            mode.setArray(values[k].ravel())
+            for previous in modes[:k]:
+                mode.axpy(-mode.dot(previous), previous)
+            mode.scale(1.0 / mode.norm())
+        self._modes = PETSc.NullSpace().create(vectors=modes, comm=p.comm)
+        return self._modes
