@@ -82,6 +82,13 @@ def test_locked_wheel_slides_at_mu_with_moment_friction_times_radius(shared_dir)
     friction = np.linalg.norm(F_T, axis=1).sum()
     assert friction == pytest.approx(MU * F_N.sum(), rel=1e-12)
     F, M = last.rigid_f["wheel"], last.rigid_m["wheel"]
+    # exactly (round-off): each node's contact force acts at R n from the centre c, n the
+    # direction from c to the node; ContactState.force is the force that holds the wheel there
+    own = result.problem.pair_of(result.problem.scene.contacts[0]).state()
+    v = own.x[own.has_element] - (np.array([X0, R]) + last.rigid_u["wheel"])
+    n, f = v / np.linalg.norm(v, axis=1)[:, None], own.force[own.has_element]
+    arms = result.problem.comm.allreduce(float(np.sum(n[:, 0] * f[:, 1] - n[:, 1] * f[:, 0])))
+    assert M[0] == pytest.approx(R * arms, rel=1e-12)
     # the drive holds the wheel against the layer's friction (towards -x at its bottom): it
     # pulls it forward (F_x > 0) and its moment about the centre is counter-clockwise,
     # M_z = +R * friction (each contact force acts at R from the centre, its normal part
