@@ -22,7 +22,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import _common as C  # noqa: F401  (pyvista before dolfinx)
-from demos import _meshing as G  # noqa: F401  (gmsh helpers, after _common)
 import numpy as np
 from mpi4py import MPI
 

@@ -11,6 +11,8 @@ as they are (:meth:`Obstacle.like`).
 An obstacle moves rigidly: its current geometry is its reference shape rotated by ``Q``
 about its ``reference`` point ``c`` (default: the shape's ``point`` or ``center``), then
 translated by ``t``: ``x = Q (X - c) + c + t`` (:func:`rotation_matrix`, :meth:`Obstacle.moved`).
+On the Python API an obstacle can also be given by a signed distance function
+(:func:`rigid_sdf`, :class:`SignedDistance`), its gradient the normal.
 """
 from __future__ import annotations
 
