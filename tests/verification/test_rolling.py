@@ -131,3 +131,35 @@ def test_driven_wheel_carries_carters_creep_force(shared_dir):
           f"{' '.join(f'{r:.4f}' for r in ratios[-4:])}")
     assert abs(ratios[-1] - carter) < 0.03  # measured 0.018
     assert abs(ratios[-1] - ratios[-2]) < 0.005  # steady
+
+
+def test_3d_cylinder_turned_by_a_rotation_vector(shared_dir):
+    """3D: a rigid cylinder along y (R = 1) pressed into a block [0, 1] x [0, 1] x [0, 0.5]
+    (20 x 4 x 4 hexahedra, nu = 0.3) and moved by 0.2 along x, with its rotation locked: it
+    slides at F_x / -F_z = mu (0.298, the normals tilting) with the moment M_y = -R F_x about
+    its axis (contact below it); turned by the rotation vector [0, d/R, 0] it rolls: F_x /
+    -F_z = -0.061 (a coarse mesh, and nu = 0.3 couples normal pressure and tangential
+    surface strain: the 2D layer's fine mesh gives 0.15)."""
+    mesh = meshes.block_3d(shared_dir / "block.msh", n=(20, 4, 4))
+    d, ratios = 0.2, {}
+    for mode, theta in (("rolling", d / R), ("locked", 0.0)):
+        scene = Scene(
+            mesh=mesh, bodies=(Body("block", E, 0.3),),
+            rigids=(Rigid("wheel", "cylinder", point=(0.4, 0.5, 0.5 + R), axis=(0.0, 1.0, 0.0),
+                          radius=R),),
+            contacts=(ContactPair("top", "wheel", mu=MU),),
+            steps=(Step("press", increments=2, bcs=(BC("bottom", (0.0, 0.0, 0.0)),),
+                        rigid=(RigidMotion("wheel", displacement=(0.0, 0.0, -0.005)),)),
+                   Step("roll", increments=8,
+                        rigid=(RigidMotion("wheel", displacement=(d, 0.0, -0.005),
+                                           rotation=(0.0, theta, 0.0)),))))
+        last = run(scene, write=False).increments[-1]
+        F, M = last.rigid_f["wheel"], last.rigid_m["wheel"]
+        ratios[mode] = F[0] / -F[2]
+        if mode == "locked":
+            assert M[1] == pytest.approx(-R * F[0], rel=0.02)  # measured 0.8 %
+            assert abs(M[0]) < 1e-9 * abs(M[1]) and abs(M[2]) < 1e-9 * abs(M[1])
+    print(f"\n3D cylinder: F_x/-F_z locked {ratios['locked']:.4f}, rolling "
+          f"{ratios['rolling']:+.4f}")
+    assert ratios["locked"] == pytest.approx(MU, rel=0.02)  # measured 0.8 % below
+    assert abs(ratios["rolling"]) < 0.25 * ratios["locked"]  # measured 0.20
