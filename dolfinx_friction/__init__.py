@@ -3,9 +3,10 @@
 The building blocks for a FEniCSx script (see the README, "Using the contact in your own
 FEniCSx code"): :class:`NodeToSurface` (one contact pair on the user's spaces and facet
 tags), :class:`Surface`, the rigid obstacles :func:`rigid_plane`, :func:`rigid_sphere`,
-:func:`rigid_cylinder`, :func:`create_matrix`; :class:`BlockProblem` (bodies given by
-UFL residuals, with contact), :class:`Newton`, :func:`solve_steps`, :func:`snes_solve`;
-:func:`revolution_weight` and :func:`axisymmetric_grad` for axisymmetric bodies.
+:func:`rigid_cylinder`, :func:`rigid_sdf` (a signed distance), :func:`create_matrix`;
+:class:`BlockProblem` (bodies given by UFL residuals, with contact), :class:`Newton`,
+:func:`solve_steps`, :func:`snes_solve`; :func:`revolution_weight` and
+:func:`axisymmetric_grad` for axisymmetric bodies.
 They import dolfinx on first use.
 
 The package logs through :mod:`logging` (logger ``dolfinx_friction``, silent unless the
@@ -40,7 +41,8 @@ _PUBLIC = {
     "NodeToSurface": "fem.node_to_surface", "Surface": "fem.node_to_surface",
     "ContactState": "fem.node_to_surface", "ContactSetupError": "fem.node_to_surface",
     "rigid_plane": "fem.node_to_surface", "rigid_sphere": "fem.node_to_surface",
-    "rigid_cylinder": "fem.node_to_surface", "create_matrix": "fem.node_to_surface",
+    "rigid_cylinder": "fem.node_to_surface", "rigid_sdf": "fem.node_to_surface",
+    "create_matrix": "fem.node_to_surface",
     "NO_ELEMENT": "fem.node_to_surface", "BlockProblem": "fem.block_problem",
     "Newton": "nls.newton", "NewtonTrace": "nls.newton", "snes_solve": "nls.newton",
     "SNESNewton": "nls.newton",

@@ -268,6 +268,18 @@ def _list_of_2_or_3(value: Any, key: str, what: str) -> list:
     return list(value)
 
 
+def rotation(value: Any, key: str) -> tuple[float, ...]:
+    """A rigid rotation [rad]: an angle (2D, counter-clockwise), stored as ``(theta,)`` (which
+    reads back), or a rotation vector of 3 numbers (3D); the mesh dimension is checked
+    across the scene."""
+    if _is_number(value):
+        return (ANY_NUMBER(value, key),)
+    if not _is_list(value) or len(value) not in (1, 3):
+        fail(key, "must be an angle (a number, 2D) or a rotation vector of 3 numbers (3D)",
+             value)
+    return tuple(ANY_NUMBER(v, join(key, i)) for i, v in enumerate(value))
+
+
 def vector(nonzero: bool = False) -> Check:
     """A vector of 2 or 3 numbers (the mesh dimension is checked across the scene)."""
 

@@ -32,3 +32,10 @@ df render "$OUT/incline_sweep/contact.0.mu=0.3" --warp 5 --scalar status \
 # an axisymmetric Neo-Hookean O-ring squeezed by 30 %: the section by von Mises stress
 df run demos/o_ring.toml --out "$OUT/o_ring" --quiet
 df render "$OUT/o_ring" --von-mises -o "$FIG/o_ring_von_mises.png"
+
+# a rigid wheel rolling freely, then driven with creep: forces and moment, the stick zone at
+# the leading edge of the contact
+df run demos/rolling_cylinder.toml --out "$OUT/rolling_cylinder" --quiet
+df plot "$OUT/rolling_cylinder" -o "$FIG/rolling_cylinder_history.png"
+df render "$OUT/rolling_cylinder" --scalar status --warp 20 \
+    -o "$FIG/rolling_cylinder_status.png"

@@ -196,6 +196,36 @@ def rigid_kinematics_numpy(shape: str, X_slave: Array, u_slave: Array, U: Array,
                       np.zeros((n, 0, 2, d)), u_slave - U, dw, np.zeros((n, 0)))
 
 
+def sdf_kinematics(X_slave: Array, u_slave: Array, U: Array, distance, gradient, hessian,
+                   Q: Array | None = None, pivot: Array | None = None) -> Kinematics:
+    """Kinematics of slave nodes against a rigid obstacle given by a signed distance
+    ``distance(y)`` (n, d) -> (n,) (> 0 outside, towards the body), its ``gradient(y)``
+    (n, d) and ``hessian(y)`` (n, d, d), in the obstacle's reference frame, turned by ``Q``
+    (d, d) about ``pivot`` (d,) and translated by ``U`` (d,).
+
+    The clearance is ``g_N = distance(y)`` at ``y = Q^T (x_p - pivot - U) + pivot``, the normal
+    the turned unit gradient; ``w = u_p - U`` as for the analytic shapes.  Numpy only.
+    """
+    x = X_slave + u_slave
+    n, d = x.shape
+    Q = np.eye(d) if Q is None else np.asarray(Q, float)
+    c = np.zeros(d) if pivot is None else np.asarray(pivot, float)
+    y = (x - c - U) @ Q + c  # rows: Q^T (x - c - U) + c
+    g_N = np.asarray(distance(y), float).reshape(n)
+    grad = np.asarray(gradient(y), float).reshape(n, d) @ Q.T  # turned: Q grad
+    H = np.einsum("ij,njk,lk->nil", Q, np.asarray(hessian(y), float).reshape(n, d, d), Q)
+    size = np.linalg.norm(grad, axis=1)
+    nrm = grad / size[:, None]
+    P = np.eye(d) - nrm[:, :, None] * nrm[:, None, :]
+    dn_slave = np.einsum("nij,njk->nik", P, H) / size[:, None, None]
+    eye = np.eye(d)
+    phi = np.tile([1.0, -1.0], (n, 1))
+    return Kinematics(nrm, g_N, np.stack([-grad, grad], axis=1),
+                      np.stack([-dn_slave, dn_slave], axis=2), phi, np.zeros((n, 2, 0)),
+                      np.zeros((n, 0, 2, d)), u_slave - U,
+                      -phi[:, None, :, None] * eye[None, :, None, :], np.zeros((n, 0)))
+
+
 @dataclass
 class ElementResult:
     """Forces, tangents and contact state of a batch of elements."""

@@ -13,6 +13,7 @@ _PUBLIC = {
     "ContactState": "node_to_surface", "ContactSetupError": "node_to_surface",
     "NO_ELEMENT": "node_to_surface", "rigid_plane": "obstacles",
     "rigid_sphere": "obstacles", "rigid_cylinder": "obstacles", "Obstacle": "obstacles",
+    "rigid_sdf": "obstacles", "SignedDistance": "obstacles",
     "ContactSettings": "contact_settings", "BodyMesh": "tagged_mesh",
     "create_matrix": "node_to_surface", "BlockProblem": "block_problem", "Timers": "block_problem",
     "CooPattern": "pattern", "DofLayout": "numbering", "SlaveNodes": "surfaces",

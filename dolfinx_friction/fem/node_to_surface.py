@@ -46,7 +46,8 @@ from dolfinx_friction.fem.axisymmetric import section_fault
 from dolfinx_friction.fem.contact_settings import CALCULIX, ContactSettings
 from dolfinx_friction.fem.numbering import BodyField, DofLayout
 from dolfinx_friction.fem.obstacles import (  # noqa: F401  (rigid_*: re-exported)
-    Obstacle, _vector, rigid_cylinder, rigid_plane, rigid_sphere)
+    Obstacle, SignedDistance, _vector, rigid_cylinder, rigid_plane, rigid_sdf, rigid_sphere,
+    rotation_size)
 from dolfinx_friction.fem.pairing import ContactInteraction, RigidMaster
 from dolfinx_friction.fem.surfaces import SlaveNodes, master_faces
 from dolfinx_friction.fem.tagged_mesh import BodyMesh
@@ -174,8 +175,10 @@ class NodeToSurface:
     slave : Surface
         The facets whose nodes are projected onto the master.
     master : Surface or Obstacle
-        Master facets of a (usually other) body, or an analytic rigid obstacle; a rigid
-        obstacle's translation is :attr:`obstacle_translation` (prescribed, no dofs).
+        Master facets of a (usually other) body, an analytic rigid obstacle, or one given by
+        a signed distance (:func:`rigid_sdf`); a rigid obstacle's translation is
+        :attr:`obstacle_translation` (prescribed, no dofs), its rotation
+        :attr:`obstacle_rotation`.
     spaces : sequence of dolfinx FunctionSpaces, optional
         The spaces of the user's system, in block order (default: the slave's space,
         then the master's if it is another one).
@@ -243,9 +246,10 @@ class NodeToSurface:
         comm = slave.V.mesh.comm
         self.comm, self.name = comm, name
         self.gdim = _check_space(slave.V, f"{name}: slave")
-        if not isinstance(master, (Surface, Obstacle)) and hasattr(master, "shape"):
+        if (not isinstance(master, (Surface, Obstacle, SignedDistance))
+                and hasattr(master, "shape")):
             master = Obstacle.like(master)  # a scene's Rigid
-        rigid = isinstance(master, Obstacle)
+        rigid = isinstance(master, (Obstacle, SignedDistance))
         if not rigid:
             if _check_space(master.V, f"{name}: master") != self.gdim:
                 raise ContactSetupError(f"{name}: slave and master meshes differ in dimension")
@@ -263,8 +267,8 @@ class NodeToSurface:
             if master.shape == "cylinder" and self.gdim != 3:
                 raise ContactSetupError(f"{name}: a rigid cylinder needs a 3D mesh (use "
                                         f"rigid_sphere for a circle in 2D)")
-            for key in ("point", "normal", "center", "axis"):
-                v = getattr(master, key)
+            for key in ("point", "normal", "center", "axis", "reference"):
+                v = getattr(master, key, None)
                 if v is not None and len(v) != self.gdim:
                     raise ContactSetupError(f"{name}: the obstacle's {key} has {len(v)} "
                                             f"components, the mesh is {self.gdim}D")
@@ -331,6 +335,58 @@ class NodeToSurface:
         if not isinstance(master, RigidMaster):
             raise AttributeError(f"{self.name}: the master is not a rigid obstacle")
         master.translation[:] = _vector(value, f"{self.name}: obstacle translation")
+
+    @property
+    def obstacle_rotation(self) -> np.ndarray:
+        """Prescribed rotation of the rigid obstacle about its reference point (its
+        ``reference``, default its ``point`` or ``center``) [rad]: (1,) an angle in 2D
+        (counter-clockwise), (3,) a rotation vector in 3D; set it (a number in 2D) before
+        :meth:`begin`, like :attr:`obstacle_translation`.  The obstacle's current geometry
+        is its reference shape rotated about the reference point, then translated."""
+        return self._rigid_master().rotation.copy()
+
+    @obstacle_rotation.setter
+    def obstacle_rotation(self, value) -> None:
+        master = self._rigid_master()
+        size = rotation_size(self.gdim)
+        theta = np.atleast_1d(np.asarray(value, dtype=float))
+        if theta.shape != (size,):
+            what = "an angle (a number)" if size == 1 else "a rotation vector of 3 numbers"
+            raise ContactSetupError(f"{self.name}: obstacle rotation must be {what} in "
+                                    f"{self.gdim}D, got {np.asarray(value).tolist()}")
+        theta = _vector(theta, f"{self.name}: obstacle rotation")
+        if master.rigid.pivot is None and any(theta):
+            raise ContactSetupError(f"{self.name}: obstacle rotation: the obstacle "
+                                    f"{master.rigid.name!r} has no reference point to rotate "
+                                    f"about (give it a reference)")
+        master.rotation[:] = theta
+
+    def obstacle_moment(self):
+        """Moment of the contact about the rigid obstacle's current reference point (its
+        reference point translated), summed over all ranks (collective) [force * length]:
+        ``sum (q - c - t) x f`` over the slave nodes' elements, ``q`` the obstacle's point
+        under the node and ``f`` the element's force at the obstacle, which sums to
+        :meth:`force` (the force that holds the obstacle against the body).  2D: a number
+        (counter-clockwise positive); 3D: (3,)."""
+        master = self._rigid_master()
+        el, d = self._interaction.elements, self.gdim
+        arm, f = np.zeros((0, d)), np.zeros((0, d))
+        if el.result is not None and len(el.slave):
+            x = self._interaction.slaves.X[el.slave] + self._u_slaves[el.slave]
+            q = x - el.result.g_N[:, None] * el.normal
+            pivot = master.rigid.pivot
+            c = (np.zeros(d) if pivot is None else np.asarray(pivot, float)) \
+                + self._interaction.master_motion
+            arm, f = q - c, el.result.f[:, 0, :]
+        if d == 2:
+            return float(self.comm.allreduce(np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0])))
+        return self.comm.allreduce(np.cross(arm, f).sum(axis=0))
+
+    def _rigid_master(self) -> RigidMaster:
+        master = self._interaction.master
+        if not isinstance(master, RigidMaster):
+            raise AttributeError(f"{self.name}: the master is not a rigid obstacle")
+        return master
 
     @property
     def law(self) -> Law:

@@ -18,10 +18,11 @@ from scipy.spatial import cKDTree
 
 from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, ElementResult,
                                               Kinematics, evaluate, face_kinematics,
-                                              rigid_kinematics)
+                                              rigid_kinematics, sdf_kinematics)
 from dolfinx_friction.contact.friction import FrictionState
 from dolfinx_friction.contact.projection import clearances
-from dolfinx_friction.fem.obstacles import Obstacle
+from dolfinx_friction.fem.obstacles import (Obstacle, SignedDistance, rotation_matrix,
+                                             rotation_size)
 from dolfinx_friction.fem.surfaces import MasterFaces, SlaveNodes
 
 
@@ -56,16 +57,60 @@ class NodeValues:
 class RigidMaster:
     """An analytic rigid obstacle whose translation is system node ``node``, or, with
     ``node = None``, the prescribed ``translation`` (gdim,) (no dofs: its element
-    couples the slave node alone)."""
+    couples the slave node alone).  Its ``rotation`` (1 component in 2D, 3 in 3D, about
+    the obstacle's :attr:`~dolfinx_friction.fem.obstacles.Obstacle.pivot`) is prescribed;
+    ``rotation_n`` and ``translation_n`` are the pose at the last commit (the increment's
+    start)."""
 
-    rigid: Obstacle
+    rigid: Union[Obstacle, SignedDistance]
     node: Optional[int] = None
     translation: Optional[np.ndarray] = None
+    rotation: Optional[np.ndarray] = None
+    rotation_n: Optional[np.ndarray] = None
+    translation_n: Optional[np.ndarray] = None
 
-    def kinematics(self, X: np.ndarray, u: np.ndarray, U: np.ndarray) -> Kinematics:
+    def __post_init__(self) -> None:
+        d = len(self.translation)
+        self.rotation = np.zeros(rotation_size(d)) if self.rotation is None else self.rotation
+        self.rotation_n = self.rotation.copy()
+        self.translation_n = self.translation.copy()
+
+    def kinematics(self, X: np.ndarray, u: np.ndarray, U: np.ndarray,
+                   rotation: Optional[np.ndarray] = None) -> Kinematics:
+        """Kinematics against the obstacle turned by ``rotation`` (default: the current
+        one) and translated by ``U`` (gdim,)."""
         r = self.rigid
-        return rigid_kinematics(r.shape, X, u, U, point=r.point, normal=r.normal,
-                                center=r.center, axis=r.axis, radius=r.radius or 0.0)
+        turned = self.rotation if rotation is None else rotation
+        if isinstance(r, SignedDistance):
+            return sdf_kinematics(X, u, U, r.distance, r.gradient, r.hessian,
+                                  rotation_matrix(turned, len(U)), r.pivot)
+        if not turned.any():
+            return rigid_kinematics(r.shape, X, u, U, point=r.point, normal=r.normal,
+                                    center=r.center, axis=r.axis, radius=r.radius or 0.0)
+        return rigid_kinematics(r.shape, X, u, U, **r.moved(rotation_matrix(turned, len(U))))
+
+    @property
+    def rotating(self) -> bool:
+        """Whether the obstacle turns in this increment."""
+        return bool(np.any(self.rotation != self.rotation_n))
+
+    def slip_offset(self, X: np.ndarray, u_n: np.ndarray, U_n: np.ndarray) -> np.ndarray:
+        """(n, gdim) motion since the increment's start, beyond its translation, of the
+        obstacle's material points under slave nodes at reference ``X`` displaced by ``u_n``
+        (n, gdim) at the start, the obstacle then translated by ``U_n``:
+        ``(Q - Q_n)(X_m - c)``, ``X_m`` the point under the node in the reference shape,
+        ``c`` the pivot.  Constant in the unknowns."""
+        d = len(U_n)
+        kin = self.kinematics(X, u_n, U_n, self.rotation_n)
+        q_n = X + u_n - kin.g_N[:, None] * kin.normal  # the point under the node, at the start
+        Q, Q_n = rotation_matrix(self.rotation, d), rotation_matrix(self.rotation_n, d)
+        arm = q_n - np.asarray(self.rigid.pivot, float) - U_n  # Q_n (X_m - c)
+        return arm @ (Q @ Q_n.T - np.eye(d)).T
+
+    def commit(self, U: np.ndarray) -> None:
+        """The pose of the converged increment (translation ``U``) becomes the start pose."""
+        self.rotation_n = self.rotation.copy()
+        self.translation_n = np.asarray(U, float).copy()
 
 
 @dataclass
@@ -141,6 +186,8 @@ class ContactInteraction:
         self._gather: Optional[NodeValues] = None
         self._slave_gather: Optional[NodeValues] = None
         self._trial: Optional[FrictionState] = None
+        #: a rigid master's translation at the last evaluation (gdim,)
+        self.master_motion: Optional[np.ndarray] = None
 
     @property
     def rigid(self) -> bool:
@@ -367,9 +414,20 @@ class ContactInteraction:
             history.g_T[new] = 0.0
             history.g_p[new] = 0.0
             history.g_p -= self.multiplier_T[s]  # the elastic slip measured from its shift
+            if self.rigid and self.master.rotating:
+                # the obstacle's material point under a node moved with its rotation too:
+                # s = w - (w_n + offset) (w = u_p - U holds the translation only).  A node
+                # touching anew measures from the obstacle's translation its w_n holds: the
+                # start's (an unknown translation), or the current one (prescribed), so with
+                # the start's rotation or with the current one (no offset)
+                old = np.flatnonzero(self.in_contact[s] | (self.master.node is not None))
+                U_n = self.master.translation_n if self.master.node is None else u_m[0]
+                history.w[old] += self.master.slip_offset(self.slaves.X[s[old]], u_s[s[old]],
+                                                          U_n)
         self._gap_offset = -ramp * self.initial_gap[s]
         el.result = evaluate(kin, self.slaves.area[s], self.params, history,
                              gap_offset=self._gap_offset - self.multiplier_N[s])
+        self.master_motion = self._gather(u)[0] if self.rigid else None
         self._trial = el.result.trial
         if self._trial is not None:
             self._trial.g_p += self.multiplier_T[s]
@@ -405,6 +463,8 @@ class ContactInteraction:
             fresh = FrictionState.zeros(len(self.in_contact), self.gdim)
             fresh.put(s, self._trial)
             self.history = fresh
+        if self.rigid and self.master_motion is not None:
+            self.master.commit(self.master_motion)
         self.multiplier_N[~self.in_contact] = 0.0  # a node that touches anew starts at 0
         self.multiplier_T[~self.in_contact] = 0.0
 

@@ -157,6 +157,7 @@ class ResultWriter:
         for r in problem.scene.rigids:
             self.history_header += [f"U_{r.name}_{a}" for a in AXES[:d]]
             self.history_header += [f"F_{r.name}_{a}" for a in AXES[:d]]
+            self.history_header += [f"M_{r.name}_{a}" for a in (AXES[2:3] if d == 2 else AXES)]
         self.reaction_groups = reaction_groups
         ids = {name: self._canonical_ids(pair.state().X) for name, pair in problem.pairs.items()}
         offsets = np.cumsum([0] + [self.comm.allreduce(len(i)) for i in ids.values()])
@@ -246,6 +247,7 @@ class ResultWriter:
             for r in self.problem.scene.rigids:
                 row += [float(v) for v in inc.rigid_u[r.name]]
                 row += [float(v) for v in inc.rigid_f[r.name]]
+                row += [float(v) for v in inc.rigid_m[r.name]]
             try:
                 _append(self.dir / "history.csv", _fmt(row) + "\n")
             except OSError as exc:

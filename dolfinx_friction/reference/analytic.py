@@ -232,6 +232,44 @@ def mindlin_sphere_stick_radius(a: float, Q: float, mu: float, P: float) -> floa
 
 
 # ------------------------------------------------------------------ incline
+def carter_saturation_creep(mu: float, a: float, R: float) -> float:
+    """Creep at which a rolling cylinder slips over its whole contact: ``xi_sat = mu a / R``
+    (Carter 1926; Johnson §8.3), ``a`` the Hertz half-width (:func:`hertz_line`)."""
+    return mu * a / R
+
+
+def carter_creep_force(creep: float, mu: float, a: float, R: float) -> float:
+    """Tangential force over ``mu P`` of a cylinder rolling with ``creep`` (the relative
+    velocity of slip over the rolling velocity) on a half-space, plane strain:
+    ``1 - (1 - xi/xi_sat)^2`` below :func:`carter_saturation_creep`, 1 above (signed as the
+    creep).
+
+    The stick zone is the leading ``2c`` of the contact, ``c/a = 1 - xi/xi_sat``, its traction
+    Carter's ``mu p0 (sqrt(1 - x^2/a^2) - (c/a) sqrt(1 - (x - a + c)^2/c^2))``
+    (:func:`carter_traction`), which strains the surface uniformly by
+    ``2 mu p0 (a - c) / (E* a) = xi`` in the stick zone.  It holds where normal pressure moves
+    no surface point tangentially (uncoupled: Dundurs' beta = 0): two bodies of one material,
+    or a rigid cylinder on an incompressible half-space (``1/E* = (1 - nu^2)/E``).
+
+    >>> round(carter_creep_force(0.5 * 0.3 * 0.04, 0.3, 0.04, 1.0), 4)
+    0.75
+    """
+    ratio = abs(creep) / carter_saturation_creep(mu, a, R)
+    return math.copysign(1.0 - (1.0 - min(ratio, 1.0)) ** 2, creep)
+
+
+def carter_traction(x, a: float, c: float, mu: float, p0: float) -> np.ndarray:
+    """Carter's tangential traction at ``x`` (rolling towards +x): the Hertz traction
+    ``mu p0 sqrt(1 - x^2/a^2)`` less a stick-zone correction of half-width ``c`` centred at
+    ``a - c`` (the leading edge)."""
+    x = np.asarray(x, dtype=float)
+    full = mu * p0 * np.sqrt(np.clip(1.0 - (x / a) ** 2, 0.0, None))
+    if c <= 0.0:
+        return full
+    s = (x - (a - c)) / c
+    return full - mu * p0 * (c / a) * np.sqrt(np.clip(1.0 - s ** 2, 0.0, None))
+
+
 def incline_push_ratio(tan_alpha: float, mu: float) -> float:
     """``H/V = (tan a + mu) / (1 - mu tan a)`` for a block sliding *up* a rough slope.
 
@@ -352,6 +390,27 @@ def self_check() -> None:
           _trapezoid(cattaneo_mindlin_traction(x, hl.a, c, mu, hl.p0), x), Q, 1e-4)
     close("Mindlin sphere: c/a = (1 - 7/8)^(1/3) = 1/2",
           mindlin_sphere_stick_radius(1.0, 0.4375, 0.5, 1.0), 0.5)
+
+    # Carter: the traction integrates to mu P (1 - c^2/a^2) = the creep-force law at the
+    # creep whose stick zone is c; its surface strain in the stick zone (the Hilbert
+    # transform of q, 1/pi PV int q(s)/(x - s) ds = mu p0 (a - c)/a there) is the creep
+    c = 0.4 * hl.a
+    creep = 2 * mu * hl.p0 * (hl.a - c) / (Es * hl.a)
+    close("Carter: creep at c/a = 0.4 is 0.6 xi_sat", creep,
+          0.6 * carter_saturation_creep(mu, hl.a, effective_radius(r1, r2)))
+    close("Carter: integral of q = mu P (1 - c^2/a^2)",
+          _trapezoid(carter_traction(x, hl.a, c, mu, hl.p0), x), mu * P * (1 - 0.16), 1e-4)
+    close("Carter: creep-force law at c/a = 0.4",
+          carter_creep_force(creep, mu, hl.a, effective_radius(r1, r2)), 1 - 0.16)
+    s_ = np.linspace(-hl.a, hl.a, 2_000_001)
+    q = carter_traction(s_, hl.a, c, mu, hl.p0)
+    for xi in np.linspace(hl.a - 1.9 * c, hl.a - 0.1 * c, 4):  # inside the stick zone
+        # PV int q/(x - s) = int (q(s) - q(x))/(x - s) + q(x) ln((a + x)/(a - x))
+        qx = carter_traction(xi, hl.a, c, mu, hl.p0)
+        gap = np.where(s_ != xi, xi - s_, 1.0)
+        pv = (_trapezoid((q - qx) / gap, s_) + qx * math.log((hl.a + xi) / (hl.a - xi)))
+        close(f"Carter: stick-zone strain at x/a = {xi / hl.a:.2f}", pv / math.pi,
+              mu * hl.p0 * (hl.a - c) / hl.a, 1e-3)
 
     # incline: solve the equilibrium of a block on the slope numerically
     tan_a, mu = 0.1, 0.3

@@ -491,3 +491,35 @@ def stacked(path: Path, n_lower: int, n_upper: int, dim: int = 2, tets: bool = F
         gmsh.model.mesh.generate(dim)
         gmsh.model.mesh.setOrder(order)
     return write_model(build, path, comm)
+
+
+def rolling_layer(path: Path, width: float = 2.0, depth: float = 1.0,
+                  track: tuple[float, float] = (0.6, 1.4), h_track: float = 0.01,
+                  h_far: float = 0.2, order: int = 2, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """Elastic layer [0, width] x [-depth, 0] for a rigid wheel rolling on its top: triangles
+    of size ``h_track`` along the top edge over ``track`` (x from, to), growing to ``h_far``
+    away from it; ``order`` 1 or 2.  Body ``block``, edges ``top``, ``bottom``, ``left``,
+    ``right``.  Written by rank 0 of ``comm``."""
+    def build():
+        s = gmsh.model.occ.addRectangle(0, -depth, 0, width, depth)
+        gmsh.model.occ.synchronize()
+        f = gmsh.model.mesh.field
+        band = f.add("Box")
+        f.setNumber(band, "VIn", h_track)
+        f.setNumber(band, "VOut", h_far)
+        f.setNumber(band, "XMin", track[0])
+        f.setNumber(band, "XMax", track[1])
+        f.setNumber(band, "YMin", -5 * h_track)
+        f.setNumber(band, "YMax", 0.0)
+        f.setNumber(band, "Thickness", 0.3 * depth)
+        f.setAsBackgroundMesh(band)
+        for key in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
+            gmsh.option.setNumber(f"Mesh.{key}", 0)
+        gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.setOrder(order)
+        group(2, [s], "block")
+        group(1, boundary(2, s, 1, 0.0), "top")
+        group(1, boundary(2, s, 1, -depth), "bottom")
+        group(1, boundary(2, s, 0, 0.0), "left")
+        group(1, boundary(2, s, 0, width), "right")
+    return write_model(build, path, comm)

@@ -44,6 +44,7 @@ class Increment:
     reactions: dict[str, np.ndarray]
     rigid_u: dict[str, np.ndarray]
     rigid_f: dict[str, np.ndarray]
+    rigid_m: dict[str, np.ndarray]  # moment about the reference point: (1,) 2D (z), (3,) 3D
     penetration: dict[str, float]  # largest overclosure / slave spacing, per contact pair
     detached: dict[str, int]  # nodes in contact before that slid off the master surface
     imbalance: float  # largest unbalanced force on a body along an axis [force]
@@ -67,15 +68,19 @@ class StepLoading:
     linear in the step's pseudo-time ``tau`` from their values at the step's start."""
 
     def __init__(self, rows: np.ndarray, u_start, u_end, f_start, f_end, first: bool,
-                 pressures: list):
+                 pressures: list, rotations: list):
         self.rows, self.u_start, self.u_end, self.first = rows, u_start, u_end, first
         self.f_start, self.f_end = f_start, f_end
         self.pressures = pressures  # (Constant, start, end) of follower pressures
+        self.rotations = rotations  # (NodeToSurface, start, end) of rotating obstacles
 
     def at(self, tau: float) -> tuple[np.ndarray, np.ndarray]:
-        """Prescribed values and external forces at ``tau``; sets the follower pressures."""
+        """Prescribed values and external forces at ``tau``; sets the follower pressures
+        and the obstacles' rotations."""
         for constant, start, end in self.pressures:
             constant.value = start + tau * (end - start)
+        for pair, start, end in self.rotations:
+            pair.obstacle_rotation = start + tau * (end - start)
         return (self.u_start + tau * (self.u_end - self.u_start),
                 self.f_start + tau * (self.f_end - self.f_start))
 
@@ -128,6 +133,10 @@ class Solver:
         self._bc_state.update({bc.on: bc.u for bc in step.bcs})
         self._load_state.update({ld.on: (ld.traction, ld.pressure) for ld in step.loads})
         self._rigid_state.update({r.name: (r.displacement, r.force) for r in step.rigid})
+        rotations = [(pair, np.asarray(p.scene.rotation_at(r.name, index, 0.0)),
+                      np.asarray(r.rotation, float))
+                     for r in step.rigid if r.rotation is not None
+                     for pair in self._pairs_on(r.name)]
         # prescribed displacements (bcs that share nodes agree: scene.validation.check_bcs)
         n = p.layout.n_owned * d
         total, count = np.zeros(n), np.zeros(n)
@@ -164,7 +173,12 @@ class Solver:
         rows = np.flatnonzero(count > 0)
         u_start = self.system.x.getArray(readonly=True)[rows].copy()
         return StepLoading(rows, u_start, mean[rows], self.system.f_ext.copy(), f_end,
-                           index == 0, pressures)
+                           index == 0, pressures, rotations)
+
+    def _pairs_on(self, rigid: str) -> list:
+        """The contact pairs whose master is the obstacle ``rigid``."""
+        p = self.problem
+        return [p.pair_of(c) for c in p.scene.contacts if c.master == rigid]
 
     # -------------------------------------------------------------- run
     def run(self, on_increment: Optional[Callable[[Increment], None]] = None,
@@ -243,17 +257,20 @@ class Solver:
                                        np.zeros(self.gdim))
                      for g, rows in self._reaction_rows.items()}
         u = system.x.getArray(readonly=True)
-        rigid_u, rigid_f = {}, {}
+        rigid_u, rigid_f, rigid_m = {}, {}, {}
         for rigid in p.scene.rigids:
             rows = p.rigid_dofs(rigid.name).ravel()
             rigid_u[rigid.name] = comm.bcast(u[rows].copy() if comm.rank == 0 else None)
             rigid_f[rigid.name] = comm.bcast(internal[rows].copy() if comm.rank == 0 else None)
+            rigid_m[rigid.name] = sum((np.atleast_1d(pair.obstacle_moment())
+                                       for pair in self._pairs_on(rigid.name)),
+                                      np.zeros(1 if self.gdim == 2 else 3))
         counts = [pair.counts() for pair in p.pairs.values()]
         active, slipping = (int(c) for c in np.sum(counts, axis=0)) if counts else (0, 0)
         trace = record.trace
         return Increment(index, name, record.number, index + record.t, trace.iterations,
                          trace.residuals[-1], trace.residuals, trace.status_changes,
                          trace.face_changes, trace.backtracks, active, slipping, wall,
-                         reactions, rigid_u, rigid_f, record.penetration, record.detached,
-                         record.imbalance, record.force, record.tolerance)
+                         reactions, rigid_u, rigid_f, rigid_m, record.penetration,
+                         record.detached, record.imbalance, record.force, record.tolerance)
 

@@ -69,6 +69,7 @@ class Rigid:
     plane: ``point``, ``normal``; sphere (circle in 2D): ``center``, ``radius``;
     cylinder (3D): ``point``, ``axis``, ``radius``.  The outward normal points
     towards the deformable body (for a sphere/cylinder: away from the axis).
+    ``reference``: the point it rotates about (default: its ``point`` or ``center``).
     """
 
     name: str
@@ -78,6 +79,7 @@ class Rigid:
     center: Optional[Vector] = None
     axis: Optional[Vector] = None
     radius: Optional[float] = None
+    reference: Optional[Vector] = None
 
     def __post_init__(self) -> None:
         validate(self, RULES[Rigid])
@@ -149,11 +151,14 @@ class Load:
 
 @dataclass(frozen=True)
 class RigidMotion:
-    """Rigid obstacle driven by a total translation or a total force at the end of the step."""
+    """Rigid obstacle driven by a total translation or a total force at the end of the step,
+    and optionally turned to a total ``rotation`` about its reference point [rad]: an angle
+    ``(theta,)`` in 2D (counter-clockwise), a rotation vector ``(tx, ty, tz)`` in 3D."""
 
     name: str
     displacement: Optional[Vector] = None
     force: Optional[Vector] = None
+    rotation: Optional[Vector] = None
 
     def __post_init__(self) -> None:
         validate(self, RULES[RigidMotion])
@@ -237,6 +242,21 @@ class Scene:
     def body(self, name: str) -> Optional[Body]:
         return next((b for b in self.bodies if b.name == name), None)
 
+    def rotation_at(self, name: str, step: int, tau: float) -> Optional[tuple[float, ...]]:
+        """The rotation of obstacle ``name`` at the time ``tau`` (0..1) of step ``step``
+        [rad]: from the total at the end of the steps before (0 before any) to this step's
+        total (the last one given), linearly; None if no step up to this one turns it."""
+        def given(s: Step) -> Optional[tuple[float, ...]]:
+            return next((m.rotation for m in s.rigid if m.name == name), None)
+        start = None
+        for s in self.steps[:step]:
+            start = given(s) or start
+        end = given(self.steps[step]) or start
+        if end is None:
+            return None
+        start = start or (0.0,) * len(end)
+        return tuple(a + tau * (b - a) for a, b in zip(start, end))
+
 
 #: The rules of each dataclass, by scene-file key in file order: checked when an object is
 #: built (from Python or by the scene reader, which takes the key names from here).
@@ -269,6 +289,7 @@ RULES: dict[type, Rules] = {
         "name": Key(v.name, required=True),
         "displacement": Key(v.vector()),
         "force": Key(v.vector()),
+        "rotation": Key(v.rotation),
     }, (v.exactly_one("displacement", "force"),)),
     Step: Rules("step", {
         "name": Key(v.name),  # a scene file may leave it out: "step-<index>"

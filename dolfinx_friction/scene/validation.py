@@ -37,7 +37,7 @@ from dolfinx_friction.fem.obstacles import (  # noqa: F401  (re-exported)
 from dolfinx_friction.rules import (  # noqa: F401  (the engine, re-exported)
     ANY_NUMBER, CALCULIX, PRESSURE, Check, Key, Rules, SceneError, _is_list, _is_number,
     _toml, array_name, boolean, exactly_one, fail, integer, join, modulus, name, number,
-    one_of, penalty, place, show, string, suggest, validate, vector)
+    one_of, penalty, place, rotation, show, string, suggest, validate, vector)
 from dolfinx_friction.rules import _list_of_2_or_3  # noqa: F401
 from dolfinx_friction.io.files import file_fault
 from dolfinx_friction.nls.defaults import unsafe_option
@@ -205,12 +205,17 @@ def _check_rigid_motions(scene: Any) -> None:
             if motion.name not in rigids:
                 fail(f"step.{i}.rigid.{j}.name", "no [[rigid]] of that name"
                      + suggest(motion.name, rigids), motion.name)
+            if (motion.rotation is not None and any(motion.rotation)
+                    and any(b.axisymmetric for b in scene.bodies)):
+                fail(f"step.{i}.rigid.{j}.rotation", "an obstacle of an axisymmetric scene "
+                     "cannot turn (a turn in the meridian section is no axisymmetric motion)",
+                     list(motion.rotation))
 
 
 def _vectors(scene: Any) -> Iterator[tuple[str, tuple]]:
     """Every vector of the scene with its key path."""
     for i, rigid in enumerate(scene.rigids):
-        for name_ in ("point", "normal", "center", "axis"):
+        for name_ in ("point", "normal", "center", "axis", "reference"):
             if getattr(rigid, name_) is not None:
                 yield f"rigid.{i}.{name_}", getattr(rigid, name_)
     for i, step in enumerate(scene.steps):
@@ -246,6 +251,13 @@ def _check_dimension(scene: Any) -> None:
             if rigid.shape == "cylinder":
                 fail(f"rigid.{i}.shape", f"is 3D only, but {example} has 2 components",
                      rigid.shape)
+    for i, step in enumerate(scene.steps):
+        for j, motion in enumerate(step.rigid):
+            if motion.rotation is not None and len(motion.rotation) != (1 if dim == 2 else 3):
+                what = ("an angle (a number) in 2D" if dim == 2
+                        else "a rotation vector of 3 numbers in 3D")
+                fail(f"step.{i}.rigid.{j}.rotation", f"must be {what} ({example} has {dim} "
+                     "components)", list(motion.rotation))
 
 
 def check_scene(scene: Any, key: str) -> None:

@@ -35,6 +35,7 @@ through their corner nodes only (P1 interpolation of the displacement).
 """
 from __future__ import annotations
 
+import dataclasses
 import os
 from pathlib import Path
 from typing import Optional, Sequence, Union
@@ -168,7 +169,11 @@ def _local_pieces(problem, warp: float, amplify: str) -> dict:
     for r in problem.scene.rigids:
         rows = problem.rigid_dofs(r.name).ravel()
         scale = warp if amplify == "total" else 1.0
-        rigids.append(dict(rigid=r, U=_pad3(u[rows][None] * scale)[0] if len(rows) else None))
+        pair = next((problem.pair_of(c) for c in problem.scene.contacts if c.master == r.name),
+                    None)
+        rigids.append(dict(rigid=turned(r, None if pair is None
+                                        else scale * pair.obstacle_rotation),
+                           U=_pad3(u[rows][None] * scale)[0] if len(rows) else None))
     return dict(bodies=bodies, slaves=slaves, masters=masters, rigids=rigids)
 
 
@@ -219,6 +224,20 @@ def _facet_polydata(x: np.ndarray) -> pyvista.PolyData:
     if nc == 2:
         return pyvista.PolyData(points, lines=conn)
     return pyvista.PolyData(points, faces=conn)
+
+
+def turned(rigid, rotation: Optional[Sequence[float]]):
+    """A scene ``Rigid`` with its geometry turned by ``rotation`` about its reference point (a
+    picture scales it as the translations, as a small rotation's displacements); as it is
+    without."""
+    if rotation is None or not np.any(rotation):
+        return rigid
+    from dolfinx_friction.fem.obstacles import Obstacle, rotation_matrix
+    obstacle = Obstacle.like(rigid)
+    moved = obstacle.moved(rotation_matrix(rotation, len(obstacle.pivot)))
+    return dataclasses.replace(rigid, **{key: tuple(float(c) for c in moved[key])
+                                         for key in ("point", "normal", "center", "axis")
+                                         if moved[key] is not None})
 
 
 def _rigid_shape(rigid, U: np.ndarray, gdim: int, bounds: np.ndarray, focus: np.ndarray):

@@ -177,14 +177,19 @@ def _scene(run: RunFiles, rigid: bool) -> Optional[Scene]:
 
 
 def _rigids(scene: Optional[Scene], row: dict, gdim: int, warp: float) -> list[dict]:
-    """The rigid obstacles of the scene, translated as the history row says."""
+    """The rigid obstacles of the scene, translated as the history row says and turned as the
+    scene's steps turn them at the row's time."""
     out = []
     for rigid in scene.rigids if scene is not None else ():
         try:
             U = [float(row[f"U_{rigid.name}_{a}"]) for a in "xyz"[:gdim]]
-        except (KeyError, ValueError):
+            step = int(row["step"])
+            rotation = scene.rotation_at(rigid.name, step, float(row["t"]) - step)
+        except (KeyError, ValueError, IndexError):
             continue
-        out.append(dict(rigid=rigid, U=warp * np.pad(U, (0, 3 - gdim))))
+        out.append(dict(rigid=viz.turned(rigid, None if rotation is None
+                                         else warp * np.asarray(rotation)),
+                        U=warp * np.pad(U, (0, 3 - gdim))))
     return out
 
 

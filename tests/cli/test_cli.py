@@ -754,11 +754,18 @@ def test_run_rigid_columns(workdir):
     out = cli("run", workdir / "rigid.toml", "--out", d)
     assert out.status == 0, str(out)
     header, rows = read_csv(d / "history.csv")
-    assert header == HISTORY + axes("R", "top") + axes("U", "floor") + axes("F", "floor")
+    assert header == (HISTORY + axes("R", "top") + axes("U", "floor") + axes("F", "floor")
+                      + axes("M", "floor"))
     assert len(rows) == 2
     last = rows[-1]
     # the floor holds the block: its force balances the reaction on the top
     assert float(last["F_floor_z"]) == pytest.approx(-float(last["R_top_z"]), rel=1e-6)
+    # its moment about its point (the origin): the block [0, 1]^2 presses it symmetrically
+    # about (0.5, 0.5), so M = (0.5, -0.5, 0) F_z
+    F_z = float(last["F_floor_z"])
+    assert float(last["M_floor_x"]) == pytest.approx(0.5 * F_z, rel=1e-6)
+    assert float(last["M_floor_y"]) == pytest.approx(-0.5 * F_z, rel=1e-6)
+    assert abs(float(last["M_floor_z"])) < 1e-9 * abs(F_z)
     assert all(float(last[f"U_floor_{a}"]) == 0.0 for a in "xyz")
     cheader, _ = read_csv(d / "contact.csv")
     assert cheader == CONTACT_3D

@@ -360,6 +360,27 @@ def test_rigid_2d_scene(tmp_path):
     assert default_output_dir(scene) == (tmp_path / "out").resolve()
 
 
+def test_rotating_rigid(tmp_path):
+    """``[[rigid]] reference`` and ``[[step.rigid]] rotation``: an angle in 2D, kept as a
+    1-tuple; a rotation vector in 3D."""
+    data = edited("rigid3d", put("rigid.0.reference", [0, 0, 1]),
+                  put("step.0.rigid.0.rotation", [0, 0.5, 0]))
+    scene = load_scene(write(tmp_path, to_toml(data)))
+    assert scene.rigids[0].reference == (0.0, 0.0, 1.0)
+    assert scene.steps[0].rigid[0] == RigidMotion("ball", displacement=(0.0, 0.0, -0.01),
+                                                  rotation=(0.0, 0.5, 0.0))
+    assert scene.steps[1].rigid[0].rotation is None
+    # ramped from 0 in its step, kept after it
+    assert scene.rotation_at("ball", 0, 0.5) == (0.0, 0.25, 0.0)
+    assert scene.rotation_at("ball", 1, 0.5) == (0.0, 0.5, 0.0)
+    assert parse_scene(edited("rigid3d")).rotation_at("ball", 1, 0.5) is None
+    data = edited("rigid2d", append("step.0.rigid", {"name": "floor", "displacement": [0, 0],
+                                                     "rotation": 1}))
+    scene = parse_scene(data)
+    assert scene.steps[0].rigid[0].rotation == (1.0,)
+    assert scene.rigids[0].reference is None
+
+
 def test_cylinder_and_tabular(tmp_path):
     data = edited(
         "rigid3d",
@@ -668,6 +689,30 @@ BAD = [
     ("tabular-nan-overclosure", "rigid3d",
      [put("contact.0.law", "tabular"), put("contact.0.table", [[0, 0], [1.0, math.nan]])],
      ["contact.0.table.1.1 = nan", "finite"]),
+    # rotating obstacles
+    ("rotation-angle-in-3d", "rigid3d", [put("step.0.rigid.0.rotation", 0.1)],
+     ["step.0.rigid.0.rotation = [0.1]", "rotation vector of 3 numbers in 3D"]),
+    ("rotation-vector-in-2d", "rigid2d", [append("step.0.rigid", {"name": "floor", "displacement":
+                                          [0, 0], "rotation": [0, 0, 0.1]})],
+     ["step.0.rigid.0.rotation", "an angle (a number) in 2D"]),
+    ("rotation-two-numbers", "rigid3d", [put("step.0.rigid.0.rotation", [0.1, 0.2])],
+     ["step.0.rigid.0.rotation = [0.1, 0.2]", "rotation vector of 3 numbers"]),
+    ("rotation-nan", "rigid3d", [put("step.0.rigid.0.rotation", [0.0, math.nan, 0.0])],
+     ["step.0.rigid.0.rotation.1 = nan", "finite"]),
+    ("rotation-inf", "rigid2d", [append("step.0.rigid", {"name": "floor", "displacement": [0, 0],
+                                                         "rotation": math.inf})],
+     ["step.0.rigid.0.rotation = inf", "finite"]),
+    ("rotation-string", "rigid3d", [put("step.0.rigid.0.rotation", "fast")],
+     ['step.0.rigid.0.rotation = "fast"']),
+    ("reference-length", "rigid3d", [put("rigid.0.reference", [0.0, 1.5])],
+     ["rigid.0.reference: has 2 components"]),
+    ("reference-nan", "rigid2d", [put("rigid.0.reference", [math.nan, 0.0])],
+     ["rigid.0.reference.0 = nan", "finite"]),
+    ("rotation-axisymmetric", "rigid2d", [put("body.0.plane", "axisymmetric"),
+                                          drop("body.0.thickness"),
+                                          append("step.0.rigid", {"name": "floor", "displacement":
+                                                                  [0, 0], "rotation": 0.1})],
+     ["step.0.rigid.0.rotation = [0.1]", "axisymmetric scene cannot turn"]),
     ("contact-method-unknown", "example", [put("contact.0.method", "lagrange")],
      ['contact.0.method = "lagrange"', '"penalty", "augmented"']),
     ("augmented-tolerance-one", "example", [put("contact.0.augmented_tolerance", 1.0)],

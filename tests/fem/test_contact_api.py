@@ -16,8 +16,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from dolfinx_friction import (NO_ELEMENT, BlockProblem, ContactSetupError, Newton, NodeToSurface,
-                              SNESNewton, Surface, create_matrix, rigid_plane, snes_solve,
-                              solve_steps)
+                              SNESNewton, Surface, create_matrix, rigid_cylinder, rigid_plane,
+                              rigid_sdf, rigid_sphere, snes_solve, solve_steps)
 from dolfinx_friction import _compat as compat
 
 E, NU = 1000.0, 0.3
@@ -159,6 +159,164 @@ def test_jacobian_two_bodies_matches_central_differences(degree):
           f"{err:.2e}, statuses {sorted(statuses(contact))}")
     assert {1, 2} <= statuses(contact)
     assert err < 1e-7
+
+
+def on_turning_obstacle(d: int, obstacle, mu=0.3, n=16):
+    """A linear-elastic block (2D: 1 x 0.5, n x 8 quadrilaterals; 3D: 1 x 1 x 0.5, 6 x 6 x 3
+    hexahedra) held at its top, its bottom the slave of a rigid ``obstacle`` below it."""
+    if d == 3:
+        m = mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [1, 1, 0.5]], [6, 6, 3],
+                            mesh.CellType.hexahedron)
+        facets = [mesh.locate_entities_boundary(m, 2, lambda x, z=z: np.isclose(x[2], z))
+                  for z in (0.0, 0.5)]
+        order = np.argsort(np.concatenate(facets))
+        tags = mesh.meshtags(m, 2, np.concatenate(facets)[order].astype(np.int32),
+                             np.concatenate([np.full(len(f), t, np.int32) for f, t
+                                             in zip(facets, (BOTTOM, TOP))])[order])
+        V, h = compat.vector_space(m, 1), 1 / 6
+    else:
+        (V, tags), h = block(0.0, 0.0, 1.0, 0.5, n, 8), 1 / n
+    u, v = fem.Function(V), ufl.TestFunction(V)
+    lam, G = E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU))
+    eps = ufl.sym(ufl.grad(u))
+    F = ufl.inner(2 * G * eps + lam * ufl.tr(eps) * ufl.Identity(d), ufl.grad(v)) * ufl.dx
+    held = fem.dirichletbc(np.zeros(d), fem.locate_dofs_topological(V, d - 1, tags.find(TOP)), V)
+    contact = NodeToSurface(Surface(V, tags, BOTTOM), obstacle, E=E, K=100 * E / h,
+                            stick_slope=10 * E / h, mu=mu)
+    return BlockProblem([F], [u], [held], [contact]), contact
+
+
+#: obstacles below the block that turn while they press it: (dimension, obstacle, pressing
+#: translation, final translation, rotation, elements along x in 2D); stick and slip nodes
+#: both at the perturbed iterate, on 1 and 2 ranks
+TURNING = {
+    "circle": (2, rigid_sphere([0.5, -1.0], 1.0), (0.0, 0.02), (0.02, 0.02), 0.05, 16),
+    "circle-turning-only": (2, rigid_sphere([0.5, -1.0], 1.0), (0.0, 0.02), (0.0, 0.02),
+                            -0.004, 32),
+    "plane-about-a-point": (2, rigid_plane([0.0, 0.0], [0.0, 1.0], reference=[0.5, -0.5]),
+                            (0.0, 0.02), (0.01, 0.02), 0.008, 16),
+    "sphere": (3, rigid_sphere([0.5, 0.5, -1.0], 1.0), (0.0, 0.0, 0.03), (0.01, 0.0, 0.03),
+               (0.01, 0.02, 0.03), 0),
+    "cylinder": (3, rigid_cylinder([0.5, 0.5, -1.0], [0.0, 1.0, 0.0], 1.0),
+                 (0.0, 0.0, 0.02), (0.01, 0.0, 0.02), (0.0, -0.01, 0.02), 0),
+}
+
+
+@pytest.mark.parametrize("case", list(TURNING))
+def test_jacobian_on_a_turning_obstacle_matches_central_differences(case):
+    """The slip against a rotating obstacle follows its material points: a constant of the
+    increment, so the tangent stays exact (the FD check of the translating plane)."""
+    d, obstacle, press_to, end, rotation, n = TURNING[case]
+    problem, contact = on_turning_obstacle(d, obstacle, n=n)
+
+    def press(t):
+        contact.obstacle_translation = np.multiply(t, press_to)
+
+    def turn(t):
+        contact.obstacle_translation = np.add(press_to, np.multiply(t, np.subtract(end, press_to)))
+        contact.obstacle_rotation = np.multiply(t, rotation)
+    solve_steps(problem, press, 2)
+    solve_steps(problem, turn, 2)
+    err = fd_error(problem, contact)
+    print(f"\n{case}: FD rel error {err:.2e}, statuses {sorted(statuses(contact))}")
+    assert {1, 2} <= statuses(contact)
+    assert err < 1e-7
+
+
+def circle_distance(center, radius):
+    """The signed distance of a circle, its gradient and Hessian, for :func:`rigid_sdf`."""
+    def distance(y):
+        return np.linalg.norm(y - center, axis=1) - radius
+
+    def gradient(y):
+        v = y - center
+        return v / np.linalg.norm(v, axis=1)[:, None]
+
+    def hessian(y):
+        v = y - center
+        r = np.linalg.norm(v, axis=1)
+        n = v / r[:, None]
+        return (np.eye(2) - n[:, :, None] * n[:, None, :]) / r[:, None, None]
+    return distance, gradient, hessian
+
+
+def press_and_turn(problem, contact, rotation=0.05):
+    def press(t):
+        contact.obstacle_translation = (0.0, 0.02 * t)
+
+    def turn(t):
+        contact.obstacle_translation = (0.02 * t, 0.02)
+        contact.obstacle_rotation = rotation * t
+    solve_steps(problem, press, 2)
+    solve_steps(problem, turn, 2)
+
+
+@pytest.mark.parametrize("hessian", ["given", "differences"])
+def test_a_signed_distance_circle_is_the_rigid_circle(hessian):
+    """An obstacle given by the signed distance of a circle (its gradient the normal) turning
+    and sliding under the block: the forces and moment of the analytic circle, and an exact
+    tangent (with the Hessian by central differences, to their error)."""
+    center = np.array([0.5, -1.0])
+    distance, gradient, exact = circle_distance(center, 1.0)
+    results = []
+    for obstacle in (rigid_sphere(center, 1.0),
+                     rigid_sdf(distance, gradient, exact if hessian == "given" else None,
+                               reference=center)):
+        problem, contact = on_turning_obstacle(2, obstacle)
+        press_and_turn(problem, contact)
+        results.append((contact.force(), contact.obstacle_moment(), fd_error(problem, contact)))
+    (F, M, _), (F_sdf, M_sdf, err) = results
+    print(f"\nsigned distance ({hessian} Hessian) vs circle: force {np.abs(F_sdf - F).max():.1e},"
+          f" moment {abs(M_sdf - M):.1e}; FD rel error {err:.2e}")
+    np.testing.assert_allclose(F_sdf, F, rtol=1e-9, atol=1e-9 * np.abs(F).max())
+    assert M_sdf == pytest.approx(M, rel=1e-9)
+    assert err < 1e-7
+
+
+def test_jacobian_on_a_wavy_signed_distance():
+    """A wavy rigid floor y = A cos(k x) - 0.02 (its level function, not a true distance)
+    turning about a point under the block: the tangent against central differences."""
+    A, k = 0.01, 2 * np.pi
+
+    def distance(y):
+        return y[:, 1] - A * np.cos(k * y[:, 0])
+
+    def gradient(y):
+        return np.stack([A * k * np.sin(k * y[:, 0]), np.ones(len(y))], axis=1)
+
+    def hessian(y):
+        H = np.zeros((len(y), 2, 2))
+        H[:, 0, 0] = A * k * k * np.cos(k * y[:, 0])
+        return H
+    problem, contact = on_turning_obstacle(2, rigid_sdf(distance, gradient, hessian,
+                                                        reference=[0.5, 0.0]))
+
+    def press(t):
+        contact.obstacle_translation = (0.0, 0.012 * t)
+
+    def turn(t):
+        contact.obstacle_translation = (0.01 * t, 0.012)
+        contact.obstacle_rotation = 0.005 * t
+    solve_steps(problem, press, 2)
+    solve_steps(problem, turn, 2)
+    err = fd_error(problem, contact)
+    print(f"\nwavy signed distance: FD rel error {err:.2e}, statuses {sorted(statuses(contact))}")
+    assert {1, 2} <= statuses(contact)
+    assert err < 1e-7
+
+
+def test_an_obstacle_without_reference_does_not_turn():
+    distance, gradient, hessian = circle_distance(np.array([0.5, -1.0]), 1.0)
+    _, contact = on_turning_obstacle(2, rigid_sdf(distance, gradient, hessian))
+    with pytest.raises(ContactSetupError) as caught:
+        contact.obstacle_rotation = 0.1
+    assert "obstacle rotation" in str(caught.value) and "reference" in str(caught.value)
+    assert "\n" not in str(caught.value)
+    _, contact = on_turning_obstacle(3, rigid_sphere([0.5, 0.5, -1.0], 1.0))
+    for bad, words in ((0.1, "rotation vector of 3 numbers in 3D"),
+                       ([0.0, np.nan, 0.0], "finite")):
+        with pytest.raises(ContactSetupError, match=words):
+            contact.obstacle_rotation = bad
 
 
 def test_newton_converges_quadratically():
