@@ -7,11 +7,11 @@ linear solver chosen by ``[solver] linear = "auto"``.
 
 Scene: ``bench_cost.py``'s block on a foundation at resolution n (2n x 2n x n hexahedra on
 3n x 3n x n, Q4 slave faces), E = 1000, nu = 0.3, CalculiX's K = 50 E and lambda = E/2,
-mu = 0.3; press 0.005 (1 increment), slide 0.02 (2 increments: full slip).  Each size is a
+mu = 0.3; press 0.005 (1 increment), slide 0.02 (2 increments).  Each size is a
 scene file (``[solver] linear = "auto"``: MUMPS up to 120k unknowns, then GMRES + GAMG) run
 as users run it, ``python -m dolfinx_friction run SCENE --quiet`` in its own process,
-serial; its summary.json gives the wall time, Newton iterations, factorisations, Krylov
-iterations, peak memory and the solver chosen; history.csv the reactions.  Up to
+serial; its summary.json gives the wall time, Newton iterations, preconditioner set-ups
+(factorisations or GAMG set-ups), Krylov iterations, peak memory and the solver chosen; history.csv the reactions.  Up to
 ``--ccx-max`` the same scene goes through ``ccx`` (single-threaded, one core) in the same
 call.
 
@@ -212,22 +212,25 @@ def chart(rows: list[dict], machine: dict) -> Path:
 
 
 def report(rows: list[dict], lines: list[str], machine: dict, load_end: float,
-           figure: Path) -> str:
+           figure: Path, note: str = "") -> str:
     table = []
     for r in rows:
         o = r["ours"]
         c = r.get("ccx")
         table.append([r["n"], f"{o['dofs']:,}", o["chosen"], o["newton"], o["cutbacks"],
-                      o["setups"], o["krylov"], B.fmt_s(o["wall"]), B.fmt_s(o["cpu"]),
-                      f"{o['memory_mib']:,.0f}", B.fmt_s(c["wall"]) if c else "-",
-                      f"{o['wall'] / c['wall']:.2f}" if c else "-",
+                      o.get("setups", o.get("factorisations")), o["krylov"], B.fmt_s(o["wall"]), B.fmt_s(o["cpu"]),
+                      f"{o['memory_mib']:,.0f}",
+                      f"{B.fmt_s(c['wall'])} / {B.fmt_s(c['cpu'])}" if c else "-",
+                      f"{o['wall'] / c['wall']:.2f} / {o['cpu'] / c['cpu']:.2f}" if c else "-",
                       f"{r['ccx_worst']:.1e}" if c else "-",
                       f"{r['press_change']:.2e}" if "press_change" in r else "-",
                       f"{o['load'][0]:.1f}"])
-    return (__doc__.split("\n\n", 1)[1].strip() + "\n\n* " + B.machine_line(machine, load_end)
+    return (__doc__.split("\n\n", 2)[2].strip() + "\n\n* " + B.machine_line(machine, load_end)
+            + (f"\n* {note}" if note else "")
             + "\n\n" + B.table(["n", "dofs", "solver", "Newton its", "cutbacks",
                                  "factorisations / AMG set-ups", "Krylov its", "wall [s]", "CPU [s]",
-                                 "peak memory [MiB]", "ccx wall [s]", "ours / ccx",
+                                 "peak memory [MiB]", "ccx wall / CPU [s]",
+                                 "ours / ccx (wall / CPU)",
                                  "reactions vs ccx", "press force change", "load"], table)
             + "\n\n" + "\n".join("* " + line for line in lines)
             + f"\n\n![scale]({figure.relative_to(B.ROOT / 'benchmarks')})\n")
@@ -241,6 +244,8 @@ def main(argv=None) -> None:
     ap.add_argument("--no-results", action="store_true")
     ap.add_argument("--from-log", help="no runs: the rows printed by an earlier run (its "
                                        "stdout), reported and charted")
+    ap.add_argument("--note", default="", help="a line for the report (where logged rows "
+                                               "come from)")
     args = ap.parse_args(argv)
     sizes = [int(s) for s in args.sizes.split(",")] if args.sizes else (
         QUICK if args.quick else FULL)
@@ -263,7 +268,7 @@ def main(argv=None) -> None:
     if not args.no_results:
         figure = chart(rows, machine)
         B.write_section("From 15k to a million dofs: a scene file, [solver] auto",
-                        report(rows, lines, machine, B.load_average(), figure))
+                        report(rows, lines, machine, B.load_average(), figure, args.note))
 
 
 if __name__ == "__main__":
