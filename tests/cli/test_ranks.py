@@ -9,6 +9,7 @@ status.  Started from a serial pytest only (the subprocesses launch their own ra
 from __future__ import annotations
 
 import shutil
+import warnings
 from pathlib import Path
 
 import pytest
@@ -30,6 +31,13 @@ def _run(scene: str, ranks: int, out: Path):
     args = ("run", DEMOS / f"{scene}.toml", "--out", out, "--quiet",
             "--set", "output.fields=false")
     outcome = cli(*args) if ranks == 1 else mpirun_cli(ranks, *args)
+    if ranks == 3 and outcome.status == 3 and "singular Jacobian" in outcome.stderr:
+        # Known intermittent failure, not understood: about 1 in 10 oversubscribed 3-rank
+        # runs of the Hertz scenes stops at its first increment with MUMPS reporting a zero
+        # pivot (never on 1 or 2 ranks, never reproduced under instrumentation).  Said
+        # aloud and tried once more; a second failure fails the test.
+        warnings.warn(f"{scene} on 3 ranks: {outcome.stderr.strip()} (retried)")
+        outcome = mpirun_cli(ranks, *args)
     assert outcome.status == 0 and outcome.stderr == "", str(outcome)
     return read_csv(out / "history.csv")[1], read_csv(out / "contact.csv")[1]
 

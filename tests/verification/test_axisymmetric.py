@@ -194,7 +194,7 @@ def test_hertz_sphere_section(shared_dir):
     a_fit, p0_fit = fit_elliptic(r, p)
     print(f"\nHertz section: F = {F:.4f}, a {a_fit / a - 1:+.2%}, p0 {p0_fit / p0 - 1:+.2%}, "
           f"axis {p[0] / p0 - 1:+.2%}")
-    assert r[0] == 0.0  # the node on the axis is a slave node with a (small) area
+    assert abs(r[0]) < 1e-12 * R  # the node on the axis is a slave node with a (small) area
     assert state["normal_force"].sum() == pytest.approx(F, rel=1e-6)
     assert a_fit == pytest.approx(a, rel=0.005)
     assert p0_fit == pytest.approx(p0, rel=0.03)
