@@ -114,14 +114,7 @@ def rectangle_2d(path: Path, n: tuple[int, int] = (8, 2), quads: bool = True,
     def build():
         s = gmsh.model.occ.addRectangle(0, 0, 0, 1, 0.25)
         gmsh.model.occ.synchronize()
-        for _, curve in gmsh.model.getBoundary([(2, s)], oriented=False):
-            a, b = gmsh.model.getBoundary([(1, curve)], oriented=False)
-            pa, pb = gmsh.model.getValue(0, a[1], []), gmsh.model.getValue(0, b[1], [])
-            axis = 0 if abs(pa[0] - pb[0]) > abs(pa[1] - pb[1]) else 1
-            gmsh.model.mesh.setTransfiniteCurve(curve, n[axis] + 1)
-        gmsh.model.mesh.setTransfiniteSurface(s)
-        if quads:
-            gmsh.model.mesh.setRecombine(2, s)
+        _transfinite_rectangle(s, n, quads)
         gmsh.model.mesh.generate(2)
         gmsh.model.mesh.setOrder(order)
         group(2, [s], "block")
