@@ -165,7 +165,7 @@ _EVALUATORS = {"L2": _eval_L2, "L3": _eval_L3, "T3": _eval_T3, "T6": _eval_T6,
                "Q4": _eval_Q4, "Q9": _eval_Q9}
 
 
-def _gauss_line(n: int) -> tuple[Array, Array]:
+def gauss_line(n: int) -> tuple[Array, Array]:
     p, w = np.polynomial.legendre.leggauss(n)
     return p[:, None], w
 
@@ -176,7 +176,7 @@ def _gauss_quad(n: int) -> tuple[Array, Array]:
     return np.stack([X.ravel(), Y.ravel()], axis=-1), np.outer(w, w).ravel()
 
 
-def _triangle_rule() -> tuple[Array, Array]:
+def triangle_rule() -> tuple[Array, Array]:
     """Six-point rule, exact for degree 4, on the unit triangle."""
     a, b = 0.445948490915965, 0.091576213509771
     wa, wb = 0.223381589678011 / 2, 0.109951743655322 / 2
@@ -189,14 +189,14 @@ _t6_edge, _t6_vertex = 332.0 / 999.0, 1.0 / 999.0
 FACE_TYPES: dict[str, FaceType] = {
     ft.name: ft
     for ft in [
-        FaceType("L2", 1, np.array([[-1.0], [1.0]]), False, (1, 0), (0.5, 0.5), _gauss_line(3)),
+        FaceType("L2", 1, np.array([[-1.0], [1.0]]), False, (1, 0), (0.5, 0.5), gauss_line(3)),
         FaceType("L3", 1, np.array([[-1.0], [1.0], [0.0]]), False, (1, 0, 2),
-                 (1 / 6, 1 / 6, 2 / 3), _gauss_line(4)),
+                 (1 / 6, 1 / 6, 2 / 3), gauss_line(4)),
         FaceType("T3", 2, np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), True, (0, 2, 1),
-                 (1 / 3,) * 3, _triangle_rule()),
+                 (1 / 3,) * 3, triangle_rule()),
         FaceType("T6", 2,
                  np.array([[0, 0], [1, 0], [0, 1], [0.5, 0.5], [0, 0.5], [0.5, 0]], dtype=float),
-                 True, (0, 2, 1, 3, 5, 4), (_t6_vertex,) * 3 + (_t6_edge,) * 3, _triangle_rule()),
+                 True, (0, 2, 1, 3, 5, 4), (_t6_vertex,) * 3 + (_t6_edge,) * 3, triangle_rule()),
         FaceType("Q4", 2, np.array([[-1.0, -1.0], [1.0, -1.0], [-1.0, 1.0], [1.0, 1.0]]), False,
                  (0, 2, 1, 3), (0.25,) * 4, _gauss_quad(3)),
         FaceType("Q9", 2,

@@ -6,7 +6,8 @@ of each candidate element (made once per search), the distinct couplings the can
 may fill (the matrix pattern of the contact, found among node pairs) and each tangent
 entry's slot among them, the Dirichlet rows and columns left out; on quadratic slave faces
 against a rigid obstacle the blocks through which a slave node's force spreads over its
-faces (:mod:`~dolfinx_friction.fem.slave_distribution`).  Every cache is kept while the
+faces (:mod:`~dolfinx_friction.fem.slave_distribution`), with the mortar distribution the
+blocks through which it reaches the master (:mod:`~dolfinx_friction.fem.mortar_distribution`).  Every cache is kept while the
 candidates (or the conditions) are the same objects.
 """
 from __future__ import annotations
@@ -72,9 +73,9 @@ class ContactAssembly:
             a = np.broadcast_to(nodes[:, :, None], (n, k, k))
             b = np.broadcast_to(nodes[:, None, :], (n, k, k))
             valid = (a >= 0) & (b >= 0)
-            distribution = self.interaction.slaves.distribution
-            star_rows, star_cols = (np.zeros(0, np.int64),) * 2 if distribution is None else \
-                distribution.pattern(candidates.slave, nodes)
+            spread = [s.pattern(candidates.slave, nodes) for s in self._spreads()]
+            star_rows = np.concatenate([np.zeros(0, np.int64)] + [r for r, _ in spread])
+            star_cols = np.concatenate([np.zeros(0, np.int64)] + [c for _, c in spread])
             width = int(max(nodes.max(initial=0), star_rows.max(initial=0))) + 1
             keys = a[valid] * width + b[valid]
             pairs, inverse = np.unique(np.concatenate([keys, star_rows * width + star_cols]),
@@ -103,30 +104,48 @@ class ContactAssembly:
             dofs[fixed[at] == dofs] = -1
         return dofs
 
+    def _spreads(self) -> list:
+        """What replaces some of the elements' own rows: the stars of quadratic slave faces
+        on a rigid obstacle (the slave node's row), the mortar distribution (the master
+        face's rows)."""
+        inter = self.interaction
+        return [s for s in (inter.slaves.distribution, inter.mortar) if s is not None]
+
     def _own_part(self, el) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The elements' forces (n, nodes, d), tangents (n, nodes, d, nodes, d) and round-off
         (n, nodes * d) on their own nodes: without the slave node's rows where its force
-        spreads over its star (:meth:`_spread_blocks`)."""
+        spreads over its star, without the master face's rows where the mortar weights
+        hand it to the master (:meth:`_spread_blocks`)."""
         f, K, roundoff = el.result.f, el.result.K, el.roundoff
-        if self.interaction.slaves.distribution is not None:
+        inter, d = self.interaction, self.gdim
+        if self._spreads():
             f, K, roundoff = f.copy(), K.copy(), roundoff.copy()
-            f[:, -1], K[:, -1], roundoff[:, -self.gdim:] = 0.0, 0.0, 0.0
+        if inter.slaves.distribution is not None:
+            f[:, -1], K[:, -1], roundoff[:, -d:] = 0.0, 0.0, 0.0
+        if inter.mortar is not None:
+            f[:, :-1], K[:, :-1], roundoff[:, :-d] = 0.0, 0.0, 0.0
         return f, K, roundoff
 
     def _spread_blocks(self) -> list[tuple]:
-        """The rows the slave nodes' forces spread over on quadratic slave faces against a
-        rigid obstacle (:class:`~dolfinx_friction.fem.slave_distribution.SlaveDistribution`),
-        one block per element: row nodes (n, r), column nodes (n, c), forces (n, r, d),
-        tangents (n, r, d, c, d) and round-off (n, r, d; with |T|); none otherwise."""
-        distribution = self.interaction.slaves.distribution
-        if distribution is None:
+        """The rows the slave nodes' forces spread over (:meth:`_spreads`): on quadratic slave
+        faces against a rigid obstacle their stars
+        (:class:`~dolfinx_friction.fem.slave_distribution.SlaveDistribution`), with the
+        mortar distribution the master nodes
+        (:class:`~dolfinx_friction.fem.mortar_distribution.MortarDistribution`); one block
+        per element and spread: row nodes (n, r), column nodes (n, c), forces (n, r, d),
+        tangents (n, r, d, c, d) and round-off (n, r, d; with |weight|)."""
+        spreads = self._spreads()
+        if not spreads:
             return []
         el = self._evaluated()
         n, k = el.nodes.shape
-        rows, f, K = distribution.spread(el.slave, el.result.f[:, -1], el.result.K[:, -1])
-        roundoff = (np.abs(distribution.weights[el.slave])[:, :, None]
-                    * el.roundoff.reshape(n, k, self.gdim)[:, None, -1])
-        return [(rows, el.nodes, f, K, roundoff)]
+        blocks = []
+        for spread in spreads:
+            rows, f, K = spread.spread(el.slave, el.result.f[:, -1], el.result.K[:, -1])
+            roundoff = (np.abs(spread.weights[el.slave])[:, :, None]
+                        * el.roundoff.reshape(n, k, self.gdim)[:, None, -1])
+            blocks.append((rows, el.nodes, f, K, roundoff))
+        return blocks
 
     def _block_slots(self, rows: np.ndarray, cols: np.ndarray, bcs: Sequence) -> np.ndarray:
         """(n, r * d, c * d) indices among :meth:`couplings` of a block's entries (row nodes

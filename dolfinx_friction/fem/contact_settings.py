@@ -18,6 +18,7 @@ from dolfinx_friction.rules import CALCULIX, Key, Rules, validate
 
 __all__ = [
     "CALCULIX",
+    "DISTRIBUTIONS",
     "KEYS",
     "LAWS",
     "MAX_AUGMENTATIONS",
@@ -36,6 +37,10 @@ TANGENTS = ("consistent", "calculix")
 #: "penalty": the law's overclosure and the stick's elastic slip stay (small, with K and
 #: lambda); "augmented": Uzawa updates of multipliers remove them to a tolerance
 METHODS = ("penalty", "augmented")
+#: how a slave node's force reaches a deformable master's nodes: "nodal" with the master
+#: face's shape functions at the node's projection (node-to-surface), "mortar" with the
+#: mortar weights of the slave faces around the node (docs/theory.md §2.3)
+DISTRIBUTIONS = ("nodal", "mortar")
 #: augmented Lagrangian updates an increment may take; one that needs more is cut back (a
 #: Uzawa update divides the violation by about 1 + K / (the structure's stiffness at a
 #: node): 2-4 updates at the default K)
@@ -107,6 +112,7 @@ KEYS: dict[str, Key] = {
     "pairing_iterations": Key(r.integer(1, 10_000)),
     "method": Key(r.one_of(*METHODS)),
     "augmented_tolerance": Key(r.number(gt=0, lt=1)),
+    "distribution": Key(r.one_of(*DISTRIBUTIONS)),
 }
 
 
@@ -157,6 +163,7 @@ class ContactSettings:
     method: str = "penalty"  # one of METHODS
     #: "augmented": the largest overclosure and stick slip left, per slave node spacing
     augmented_tolerance: float = 1e-4
+    distribution: str = "nodal"  # one of DISTRIBUTIONS
 
     def __post_init__(self) -> None:
         validate(self, RULES)

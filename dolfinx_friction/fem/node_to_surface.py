@@ -44,7 +44,9 @@ from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.errors import ContactSetupError
 from dolfinx_friction.fem.axisymmetric import section_fault
 from dolfinx_friction.fem.contact_assembly import ContactAssembly
+from dolfinx_friction.contact.mortar_weights import LINEAR_FACES
 from dolfinx_friction.fem.contact_settings import CALCULIX, ContactSettings
+from dolfinx_friction.fem.mortar_distribution import MortarDistribution
 from dolfinx_friction.fem.numbering import BodyField, DofLayout
 from dolfinx_friction.fem.obstacles import (  # noqa: F401  (rigid_*: re-exported)
     Obstacle, SignedDistance, _vector, rigid_cylinder, rigid_plane, rigid_sdf, rigid_sphere,
@@ -212,6 +214,12 @@ class NodeToSurface:
         updated by :meth:`augment` (Uzawa) until the overclosure and the elastic slip of
         sticking nodes are below ``augmented_tolerance`` (default 1e-4) times the slave
         node spacing, K and lambda unchanged (docs/theory.md §6.5).
+    distribution : str
+        How a slave node's force reaches a deformable master's nodes: ``"nodal"`` (default)
+        with the master face's shape functions at the node's projection, ``"mortar"`` with
+        mortar weights over the slave faces around the node, measured at the start of each
+        increment (docs/theory.md §2.3: the contact patch test on non-matching meshes;
+        linear faces only; nothing changes against a rigid obstacle).
     obstacle_index, n_obstacles : int
         For a rigid obstacle whose translation is an unknown of a
         :class:`~dolfinx_friction.BlockProblem` with ``obstacles=n_obstacles`` (force- or
@@ -241,7 +249,8 @@ class NodeToSurface:
                  tangent: str = "consistent", thickness: float = 1.0,
                  axisymmetric: bool = False,
                  pairing_iterations: int = 8, method: str = "penalty",
-                 augmented_tolerance: float = 1e-4, name: str = "contact",
+                 augmented_tolerance: float = 1e-4, distribution: str = "nodal",
+                 name: str = "contact",
                  obstacle_index: Optional[int] = None, n_obstacles: int = 0,
                  body_names: tuple[str, str] = ("slave", "master")):
         comm = slave.V.mesh.comm
@@ -258,7 +267,7 @@ class NodeToSurface:
             spaces = [slave.V] if rigid or master.V is slave.V else [slave.V, master.V]
         self.spaces = list(spaces)
         given = self._given(law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
-                            pairing_iterations, method, augmented_tolerance)
+                            pairing_iterations, method, augmented_tolerance, distribution)
         self.layout = DofLayout(comm, [V.dofmap.index_map for V in self.spaces], n_obstacles)
         slave_facets = _facets(slave, f"{name}: slave", comm)
         self._fields: list[BodyField] = []
@@ -301,9 +310,18 @@ class NodeToSurface:
         # 12 digits make h, and the defaults scaled with it, the same on any number of ranks
         self.spacing = float(f"{np.median(np.concatenate(comm.allgather(slaves.spacing))):.12g}")
         self.params = self._parameters(given, law, E)
+        mortar = None
+        if given.distribution == "mortar" and not rigid:
+            faces = {slaves.face.name, master_side.face.name}
+            if faces - set(LINEAR_FACES):
+                raise ContactSetupError(
+                    f"{name}: distribution = \"mortar\" needs linear faces (degree 1 bodies), "
+                    f"not {'/'.join(sorted(faces - set(LINEAR_FACES)))}")
+            mortar = MortarDistribution(slave_field, slaves.face, slaves.facet_nodes,
+                                        slaves.nodes, master_side)
         self._interaction = ContactInteraction(comm, name, self.params.element, slaves,
                                                master_side, self.gdim,
-                                               self.params.pairing_iterations)
+                                               self.params.pairing_iterations, mortar)
         self.ramp = 0.0
         self._u_n: Optional[PETSc.Vec] = None
         self._saved: Optional[tuple] = None
@@ -404,24 +422,29 @@ class NodeToSurface:
     @property
     def symmetric(self) -> bool:
         """Whether the contact tangent is symmetric: frictionless, with each slave node's
-        force on the node itself (not spread over quadratic slave faces on an obstacle)."""
-        return self.mu == 0.0 and self._interaction.slaves.distribution is None
+        force on the node itself (not spread over quadratic slave faces on an obstacle) and
+        on the master face's nodes (not by mortar weights)."""
+        inter = self._interaction
+        return self.mu == 0.0 and inter.slaves.distribution is None and inter.mortar is None
 
     def resolved(self) -> dict:
         """The contact settings as used, every default resolved, as plain numbers: ``law``
         (``"linear"``, ``"exponential"``, ``"tabular"``) and its parameters (``K``,
         ``sigma_inf``, ``c0`` / ``c0``, ``p0`` / ``pressures``, ``overclosures``),
         ``mu``, ``stick_slope``, ``tangent``, ``pairing_iterations``, ``method``,
-        ``augmented_tolerance`` and the slave node ``spacing`` h the defaults scale with."""
+        ``augmented_tolerance``, ``distribution`` and the slave node ``spacing`` h the
+        defaults scale with."""
         return {"law": type(self.law).__name__.lower(), **asdict(self.law), "mu": self.mu,
                 "stick_slope": self.stick_slope, "tangent": self.params.element.tangent,
                 "pairing_iterations": self.params.pairing_iterations,
                 "method": self.params.method,
-                "augmented_tolerance": self.params.augmented_tolerance, "spacing": self.spacing}
+                "augmented_tolerance": self.params.augmented_tolerance,
+                "distribution": self.params.distribution, "spacing": self.spacing}
 
     # ------------------------------------------------------------- set-up
     def _given(self, law, K, sigma_inf, c0, mu, stick_slope, E, tangent,
-               pairing_iterations, method, augmented_tolerance) -> ContactSettings:
+               pairing_iterations, method, augmented_tolerance,
+               distribution) -> ContactSettings:
         """The parameters as given, checked by the contact settings' rules (the same
         one-line messages as a scene file's ``[[contact]]``); defaults still to be
         resolved."""
@@ -429,7 +452,8 @@ class NodeToSurface:
             given = ContactSettings(K=K, sigma_inf=sigma_inf, c0=c0, mu=mu,
                                     stick_slope=stick_slope, tangent=tangent,
                                     pairing_iterations=pairing_iterations, method=method,
-                                    augmented_tolerance=augmented_tolerance)
+                                    augmented_tolerance=augmented_tolerance,
+                                    distribution=distribution)
             if E is not None:
                 modulus(E, "E")
         except SceneError as error:
@@ -456,7 +480,8 @@ class NodeToSurface:
                                         f"give {key}")
         law = law if law is not None else make_law(pair)
         return _Parameters(ContactParameters(law, pair.mu, pair.stick_slope, pair.tangent),
-                           pair.pairing_iterations, pair.method, pair.augmented_tolerance)
+                           pair.pairing_iterations, pair.method, pair.augmented_tolerance,
+                           pair.distribution)
 
     def _field(self, V, group: str, facets: np.ndarray, thickness: float,
                axisymmetric: bool) -> BodyField:
@@ -503,7 +528,8 @@ class NodeToSurface:
         self._saved = self._interaction.save()
         self._load_fields(self._u_n)
         self._interaction.measure_areas()
-        self._search(x, first=True)
+        moved = self._measure_mortar()
+        self._search(x, True, moved)
         self._iteration = 0
 
     def update(self, x: PETSc.Vec, pairing: bool = True, search: bool = True) -> bool:
@@ -586,7 +612,19 @@ class NodeToSurface:
                 self.layout.owned_slice(f.block, self.gdim)]
             compat.scatter_forward(f.u)
 
-    def _search(self, x: PETSc.Vec, first: bool) -> None:
+    def _measure_mortar(self) -> bool:
+        """The mortar weights on the bodies as loaded (:meth:`_load_fields`): whether the
+        master nodes they reach changed on this rank (False without mortar weights)."""
+        mortar = self._interaction.mortar
+        if mortar is None:
+            return False
+        x = [f.X + f.u.x.array.reshape(-1, self.gdim)[: len(f.X)]
+             for f in (self._slave_field, self._master_field)]
+        return mortar.update(x[0], x[1][self._interaction.master.local])
+
+    def _search(self, x: PETSc.Vec, first: bool, moved: bool = False) -> None:
+        """Search the candidates at ``x`` (``moved``: the mortar weights reach other master
+        nodes on this rank: the couplings change too)."""
         before = self._interaction.candidates.nodes
         self._load_fields(x)
         master_u = None
@@ -594,7 +632,7 @@ class NodeToSurface:
             f = self._master_field
             master_u = f.u.x.array.reshape(-1, self.gdim)[self._interaction.master.local]
         self._interaction.search(x, master_u, first)
-        same = np.array_equal(before, self._interaction.candidates.nodes)
+        same = not moved and np.array_equal(before, self._interaction.candidates.nodes)
         if self.comm.allreduce(0 if same else 1):
             self.couplings_version += 1
 
@@ -761,6 +799,7 @@ class _Parameters:
     pairing_iterations: int
     method: str
     augmented_tolerance: float
+    distribution: str
 
 
 def create_matrix(a, contacts: Sequence[NodeToSurface] = ()) -> PETSc.Mat:

@@ -21,6 +21,7 @@ from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, Ele
                                               rigid_kinematics, sdf_kinematics)
 from dolfinx_friction.contact.friction import FrictionState
 from dolfinx_friction.contact.projection import clearances
+from dolfinx_friction.fem.mortar_distribution import MortarDistribution
 from dolfinx_friction.fem.obstacles import (Obstacle, SignedDistance, rotation_matrix,
                                              rotation_size)
 from dolfinx_friction.fem.surfaces import MasterFaces, SlaveNodes
@@ -152,13 +153,14 @@ TIE = 1e-9
 
 
 class ContactInteraction:
-    """Runtime state of one contact pair on this rank."""
+    """Runtime state of one contact pair on this rank (``mortar``: the weights that hand
+    the slave nodes' forces to the master, None: the master face's shape functions)."""
 
     def __init__(self, comm: MPI.Comm, name: str, params: ContactParameters,
                  slaves: SlaveNodes, master: Union[MasterFaces, RigidMaster], gdim: int,
-                 pairing_iterations: int = 8):
+                 pairing_iterations: int = 8, mortar: Optional[MortarDistribution] = None):
         self.comm, self.name, self.params, self.gdim = comm, name, params, gdim
-        self.slaves, self.master = slaves, master
+        self.slaves, self.master, self.mortar = slaves, master, mortar
         self.pairing_iterations = pairing_iterations
         n = len(slaves.nodes)
         self.history = FrictionState.zeros(n, gdim)

@@ -18,6 +18,15 @@ from dolfinx_friction.contact.slave_weights import distribution
 from dolfinx_friction.fem.numbering import BodyField
 
 
+def owner_ranks(field: BodyField, nodes: np.ndarray) -> np.ndarray:
+    """The rank that owns each of the body's system nodes ``nodes`` (n,) (collective)."""
+    first = int(field.nodes[0]) if field.n_owned else 0
+    comm = field.V.mesh.comm
+    ranges = np.array(comm.allgather((first, first + field.n_owned)), dtype=np.int64)
+    owner = np.flatnonzero(ranges[:, 1] > ranges[:, 0])
+    return owner[np.searchsorted(ranges[owner, 0], nodes, side="right") - 1]
+
+
 class SlaveDistribution:
     """The stars of the owned slave nodes of one contact pair on this rank.
 
@@ -30,12 +39,9 @@ class SlaveDistribution:
                  slaves: np.ndarray):
         comm = field.V.mesh.comm
         self.comm, self.face, self._facet_nodes = comm, face, facet_nodes
-        first = int(field.nodes[0]) if field.n_owned else 0
-        ranges = np.array(comm.allgather((first, first + field.n_owned)), dtype=np.int64)
         face_sys = field.nodes[facet_nodes]  # (n_faces, nn) system nodes
         k_sys = face_sys.ravel()  # one entry per (face, position): the node whose column
-        owner = np.flatnonzero(ranges[:, 1] > ranges[:, 0])
-        owner = owner[np.searchsorted(ranges[owner, 0], k_sys, side="right") - 1]
+        owner = owner_ranks(field, k_sys)
         #: the entries sent to each rank, in the order of the values sent every increment
         self._order = np.argsort(owner, kind="stable")
         self._counts = np.bincount(owner, minlength=comm.size)

@@ -112,6 +112,13 @@ class SlaveNodes:
         self.reference_area = self._areas(field.X)
         self.update_areas()
 
+    @property
+    def facet_nodes(self) -> np.ndarray:
+        """(n_faces, nn) local nodes of the slave faces this rank holds (read-only)."""
+        nodes = self._facet_nodes.view()
+        nodes.flags.writeable = False
+        return nodes
+
     def update_areas(self) -> None:
         """``A_p`` on the faces as deformed by the body's current displacement."""
         f = self.field

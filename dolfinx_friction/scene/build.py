@@ -250,7 +250,8 @@ class DiscreteScene:
                 thickness=out_of_plane(body.thickness, self.gdim),
                 axisymmetric=body.axisymmetric,
                 pairing_iterations=pair.pairing_iterations, method=pair.method,
-                augmented_tolerance=pair.augmented_tolerance, name=f"{pair.slave}->{pair.master}",
+                augmented_tolerance=pair.augmented_tolerance,
+                distribution=pair.distribution, name=f"{pair.slave}->{pair.master}",
                 obstacle_index=index, n_obstacles=len(self.scene.rigids),
                 body_names=(body.name, pair.master))
         except ContactSetupError as error:  # e.g. a default K that overflows

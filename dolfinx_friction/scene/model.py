@@ -110,6 +110,9 @@ class ContactPair:
     #: are below ``augmented_tolerance`` times the slave node spacing)
     method: str = "penalty"
     augmented_tolerance: float = 1e-4
+    #: "nodal" or "mortar": how a slave node's force reaches a deformable master's nodes
+    #: (the master face's shape functions at its projection, or mortar weights)
+    distribution: str = "nodal"
 
     def __post_init__(self) -> None:
         validate(self, RULES[ContactPair])

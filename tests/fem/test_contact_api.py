@@ -661,7 +661,8 @@ def test_default_penalty_scales_with_the_slave_node_spacing(cell):
     assert resolved == {"law": "linear", "K": contact.law.K, "sigma_inf": E / 70000,
                         "c0": 1e-3, "mu": 0.3, "stick_slope": contact.stick_slope,
                         "tangent": "consistent", "pairing_iterations": 8,
-                        "method": "penalty", "augmented_tolerance": 1e-4, "spacing": h}
+                        "method": "penalty", "augmented_tolerance": 1e-4,
+                        "distribution": "nodal", "spacing": h}
     calculix = NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, mu=0.3, K="calculix",
                              stick_slope="calculix")
     assert (calculix.law.K, calculix.stick_slope) == (50 * E, E / 2)

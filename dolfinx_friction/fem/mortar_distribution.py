@@ -1,0 +1,171 @@
+"""How a slave node's contact force reaches the master with ``distribution = "mortar"``.
+
+Plain node-to-surface hands slave node ``k``'s force ``F_k`` to the nodes ``m`` of its
+master face with the shape functions at its projection, ``N_m(eta_k)``.  The mortar
+distribution hands it over with the weights
+
+    W_km = int N_k(s) N_m(eta(s)) ds / sum_m' int N_k(s) N_m'(eta(s)) ds
+
+over the slave faces around ``k`` (:func:`~dolfinx_friction.contact.mortar_weights.
+mortar_integrals`), ``f_m = -W_km F_k`` (docs/theory.md §2.3): a uniform pressure then
+loads the master with its consistent nodal forces.  The weights are measured on the
+surfaces as deformed at the start of each increment (the converged state, as the slave
+areas) and held within it: the tangent rows of the master are ``-W_km dF_k/du``.
+
+Each rank integrates the slave faces it holds against the master faces near them (sent
+by their ranks) and sends each node's integrals to the rank that owns the node.
+"""
+from __future__ import annotations
+
+import numpy as np
+from mpi4py import MPI
+from scipy.spatial import cKDTree
+
+from dolfinx_friction.contact.mortar_weights import LINEAR_FACES, mortar_integrals
+from dolfinx_friction.contact.shapes import FaceType, surface_vector
+from dolfinx_friction.fem.numbering import BodyField
+from dolfinx_friction.fem.slave_distribution import owner_ranks
+from dolfinx_friction.fem.surfaces import MasterFaces
+
+
+class MortarDistribution:
+    """The mortar weights of the owned slave nodes of one contact pair on this rank.
+
+    ``field``: the slave body; ``face``: its (linear) face type; ``facet_nodes``
+    (n_faces, nn): local nodes of the slave faces this rank holds; ``slaves`` (n,): the
+    system node numbers of the slave nodes this rank owns; ``master``: the master faces
+    this rank holds.
+    """
+
+    def __init__(self, field: BodyField, face: FaceType, facet_nodes: np.ndarray,
+                 slaves: np.ndarray, master: MasterFaces):
+        for f in (face, master.face):
+            if f.name not in LINEAR_FACES:
+                raise ValueError(f"the mortar distribution needs linear faces, not {f.name}")
+        self.comm: MPI.Comm = field.V.mesh.comm
+        self.face, self.master = face, master
+        self._facet_nodes = facet_nodes
+        self._face_sys = field.nodes[facet_nodes]  # (n_faces, nn) system nodes
+        self._owner = owner_ranks(field, self._face_sys.ravel()).reshape(self._face_sys.shape)
+        self._slaves = np.asarray(slaves, dtype=np.int64)
+        #: (n, width) system nodes of the master nodes each owned slave node's force
+        #: reaches, -1 beyond the last
+        self.nodes = np.full((len(slaves), 0), -1, dtype=np.int64)
+        #: (n, width) the weights ``W_km`` (rows sum to 1 where the node meets the
+        #: master, 0 elsewhere), set by :meth:`update`
+        self.weights = np.zeros(self.nodes.shape)
+
+    def update(self, x_slave: np.ndarray, x_master: np.ndarray) -> bool:
+        """The weights with the slave body's local nodes at ``x_slave`` (n_local, gdim) and
+        the held master faces' nodes at ``x_master`` (n_faces, nn_m, gdim) (collective).
+        Returns whether the nodes the forces reach changed on this rank."""
+        xs = x_slave[self._facet_nodes]
+        xm, m_sys = self._near_master_faces(xs, x_master)
+        s, m = _facing_pairs(self.face, xs, self.master.face, xm)
+        integrals = mortar_integrals(self.face, xs[s], self.master.face, xm[m])
+        k = np.broadcast_to(self._face_sys[s][:, :, None], integrals.shape).ravel()
+        owner = np.broadcast_to(self._owner[s][:, :, None], integrals.shape).ravel()
+        j = np.broadcast_to(m_sys[m][:, None, :], integrals.shape).ravel()
+        value = integrals.ravel()
+        keep = value > 0.0
+        k, owner, j, value = k[keep], owner[keep], j[keep], value[keep]
+        order = np.argsort(owner, kind="stable")
+        ends = np.cumsum(np.bincount(owner, minlength=self.comm.size))
+        k, j, value = k[order], j[order], value[order]
+        received = self.comm.alltoall([(k[e - c:e], j[e - c:e], value[e - c:e])
+                                       for c, e in zip(np.diff(ends, prepend=0), ends)])
+        k = np.concatenate([r[0] for r in received]).astype(np.int64)
+        j = np.concatenate([r[1] for r in received]).astype(np.int64)
+        value = np.concatenate([r[2] for r in received])
+        before = self.nodes
+        self.nodes, self.weights = _rows(self._slaves, k, j, value)
+        return not np.array_equal(before, self.nodes)
+
+    def _near_master_faces(self, xs: np.ndarray, x_master: np.ndarray
+                           ) -> tuple[np.ndarray, np.ndarray]:
+        """The master faces (all ranks) whose boxes meet the box of this rank's slave faces
+        ``xs`` (n, nn, gdim), inflated by twice the largest face: coordinates
+        (n_m, nn_m, gdim) and system nodes (n_m, nn_m)."""
+        size = 2.0 * self.comm.allreduce(max(_largest(xs), _largest(x_master)), op=MPI.MAX)
+        box = None
+        if len(xs):
+            points = xs.reshape(-1, xs.shape[-1])
+            box = np.stack([points.min(0) - size, points.max(0) + size])
+        lo, hi = x_master.min(axis=1), x_master.max(axis=1)
+        outgoing = []
+        for b in self.comm.allgather(box):
+            keep = (np.zeros(len(lo), bool) if b is None
+                    else np.all((hi >= b[0]) & (lo <= b[1]), axis=1))
+            outgoing.append((x_master[keep], self.master.nodes[keep]))
+        incoming = self.comm.alltoall(outgoing)
+        shape = x_master.shape[1:]
+        return (np.concatenate([f[0] for f in incoming]).reshape(-1, *shape),
+                np.concatenate([f[1] for f in incoming]).reshape(-1, shape[0]))
+
+    def pattern(self, slave: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Node pairs (rows, cols), each (m,), that elements of the slave nodes ``slave``
+        (n,) with nodes ``cols`` (n, c) (-1: none) couple through the master rows."""
+        rows = self.nodes[slave]
+        r = np.broadcast_to(rows[:, :, None], rows.shape + cols.shape[1:])
+        c = np.broadcast_to(cols[:, None, :], r.shape)
+        keep = (r >= 0) & (c >= 0)
+        return r[keep], c[keep]
+
+    def spread(self, slave: np.ndarray, force: np.ndarray, tangent: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The master rows of elements of the slave nodes ``slave`` (n,) whose slave-node
+        force is ``force`` (n, d) with derivative ``tangent`` (n, d, c, d) over the
+        elements' nodes: master nodes (n, width), forces ``-W F`` (n, width, d) and
+        tangents (n, width, d, c, d)."""
+        W = self.weights[slave]
+        return (self.nodes[slave], -W[:, :, None] * force[:, None, :],
+                -W[:, :, None, None, None] * tangent[:, None])
+
+
+def _largest(x: np.ndarray) -> float:
+    """The largest distance of a face node from its face's centroid (faces (n, nn, gdim))."""
+    if not len(x):
+        return 0.0
+    return float(np.linalg.norm(x - x.mean(axis=1, keepdims=True), axis=2).max())
+
+
+def _facing_pairs(slave: FaceType, xs: np.ndarray, master: FaceType, xm: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(slave face, master face) pairs that may overlap: centroids closer than the two
+    faces' sizes, normals facing each other."""
+    if not len(xs) or not len(xm):
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    c_s, c_m = xs.mean(axis=1), xm.mean(axis=1)
+    reach = _largest(xs) + _largest(xm)
+    near = cKDTree(c_m).query_ball_point(c_s, 1.5 * reach)
+    s = np.repeat(np.arange(len(xs)), [len(n) for n in near])
+    m = np.concatenate([np.asarray(n, dtype=np.int64) for n in near])
+    facing = np.einsum("nd,nd->n", _normals(slave, xs)[s], _normals(master, xm)[m]) < 0.0
+    return s[facing], m[facing]
+
+
+def _normals(face: FaceType, x: np.ndarray) -> np.ndarray:
+    """Surface vectors (n, gdim) at the faces' centroids (faces (n, nn, gdim))."""
+    _, dphi, _ = face.evaluate(face.centroid[None])
+    return surface_vector(np.einsum("ka,nkd->nad", dphi[0], x))
+
+
+def _rows(slaves: np.ndarray, k: np.ndarray, j: np.ndarray, value: np.ndarray
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """The integrals ``value`` of slave system nodes ``k`` against master system nodes
+    ``j`` (m,) summed per pair and normalised per slave node: nodes and weights
+    (len(slaves), width), -1 and 0 beyond each row's end."""
+    order = np.argsort(slaves)
+    row = order[np.searchsorted(slaves, k, sorter=order)]  # slave index per entry
+    width = int(j.max(initial=0)) + 1
+    keys, inverse = np.unique(row * width + j, return_inverse=True)
+    sums = np.bincount(inverse, weights=value, minlength=len(keys))
+    owner_of, master = keys // width, keys % width
+    start = np.searchsorted(owner_of, np.arange(len(slaves)))
+    rank = np.arange(len(keys)) - start[owner_of]
+    columns = int(rank.max(initial=-1)) + 1
+    nodes = np.full((len(slaves), columns), -1, dtype=np.int64)
+    weights = np.zeros((len(slaves), columns))
+    nodes[owner_of, rank], weights[owner_of, rank] = master, sums
+    total = weights.sum(axis=1, keepdims=True)
+    return nodes, np.divide(weights, total, out=np.zeros_like(weights), where=total > 0)
