@@ -446,8 +446,8 @@ def stacked(path: Path, n_lower: int, n_upper: int, dim: int = 2, tets: bool = F
     (``n_lower``, ``n_upper`` cells along each side of the interface, half as many across
     each block's height, at least 2), quadrilaterals/hexahedra or with ``tets`` triangles/
     tetrahedra, of geometric ``order`` 1 or 2.  Groups: ``lower``, ``upper``; facets
-    ``<body>_bottom``, ``<body>_top``, ``<body>_x0`` (``x = 0``) and in 3D ``<body>_y0``
-    (``y = 0``)."""
+    ``<body>_bottom``, ``<body>_top``, ``<body>_x0`` (``x = 0``), ``<body>_x1`` (``x = 1``)
+    and in 3D ``<body>_y0`` (``y = 0``)."""
     def build():
         occ = gmsh.model.occ
         bodies = {}
@@ -479,6 +479,7 @@ def stacked(path: Path, n_lower: int, n_upper: int, dim: int = 2, tets: bool = F
             group(dim - 1, boundary(dim, tag, up, z0), f"{name}_bottom")
             group(dim - 1, boundary(dim, tag, up, z0 + 0.5), f"{name}_top")
             group(dim - 1, boundary(dim, tag, 0, 0.0), f"{name}_x0")
+            group(dim - 1, boundary(dim, tag, 0, 1.0), f"{name}_x1")
             if dim == 3:
                 group(dim - 1, boundary(dim, tag, 1, 0.0), f"{name}_y0")
         gmsh.model.mesh.generate(dim)
