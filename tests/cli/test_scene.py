@@ -715,6 +715,8 @@ BAD = [
      ["step.0.rigid.0.rotation = [0.1]", "axisymmetric scene cannot turn"]),
     ("contact-method-unknown", "example", [put("contact.0.method", "lagrange")],
      ['contact.0.method = "lagrange"', '"penalty", "augmented"']),
+    ("contact-distribution-unknown", "example", [put("contact.0.distribution", "segment")],
+     ['contact.0.distribution = "segment"', '"nodal", "mortar"']),
     ("augmented-tolerance-one", "example", [put("contact.0.augmented_tolerance", 1.0)],
      ["contact.0.augmented_tolerance = 1.0", "< 1"]),
     # [solver]: the linear solver; input files never run code nor choose files to write

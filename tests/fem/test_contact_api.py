@@ -689,7 +689,14 @@ def test_bad_input_gets_one_clear_line():
         (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, mu=0.3, K=1e4,
                                stick_slope="calculix"), "give E"),
         (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=1e307), "is so large"),
+        (lambda: NodeToSurface(Surface(V, tags, BOTTOM), plane, E=E, distribution="segment"),
+         'distribution = "segment": must be one of "nodal", "mortar"'),
+        (lambda: NodeToSurface(Surface(Q, qtags, BOTTOM), Surface(V2, tags2, TOP),
+                               spaces=[Q, V2], E=E, distribution="mortar"),
+         'distribution = "mortar" needs linear faces (degree 1 bodies), not L3'),
     ]
+    Q, qtags = block(0.0, 0.6, 1.0, 0.5, 2, 1, degree=2)
+    V2, tags2 = block(0.0, 0.0, 1.0, 0.6, 2, 1)
     assert rigid_plane([0, 0], [0, 1e-200]).normal == (0.0, 1.0)  # tiny, not zero
     for make, text in cases:
         with pytest.raises(ContactSetupError) as info:
