@@ -1,4 +1,4 @@
-"""Mortar integrals of linear slave faces against linear master faces (docs/theory.md §2.3).
+"""Mortar integrals of linear slave faces against linear master faces (docs/theory.md §2.4).
 
 For a slave face ``S`` and a master face ``M`` the integrals
 

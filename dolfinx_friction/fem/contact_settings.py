@@ -39,7 +39,7 @@ TANGENTS = ("consistent", "calculix")
 METHODS = ("penalty", "augmented")
 #: how a slave node's force reaches a deformable master's nodes: "nodal" with the master
 #: face's shape functions at the node's projection (node-to-surface), "mortar" with the
-#: mortar weights of the slave faces around the node (docs/theory.md §2.3)
+#: mortar weights of the slave faces around the node (docs/theory.md §2.4)
 DISTRIBUTIONS = ("nodal", "mortar")
 #: augmented Lagrangian updates an increment may take; one that needs more is cut back (a
 #: Uzawa update divides the violation by about 1 + K / (the structure's stiffness at a

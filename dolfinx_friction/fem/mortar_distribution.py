@@ -7,7 +7,7 @@ distribution hands it over with the weights
     W_km = int N_k(s) N_m(eta(s)) ds / sum_m' int N_k(s) N_m'(eta(s)) ds
 
 over the slave faces around ``k`` (:func:`~dolfinx_friction.contact.mortar_weights.
-mortar_integrals`), ``f_m = -W_km F_k`` (docs/theory.md §2.3): a uniform pressure then
+mortar_integrals`), ``f_m = -W_km F_k`` (docs/theory.md §2.4): a uniform pressure then
 loads the master with its consistent nodal forces.  The weights are measured on the
 surfaces as deformed at the start of each increment (the converged state, as the slave
 areas) and held within it: the tangent rows of the master are ``-W_km dF_k/du``.

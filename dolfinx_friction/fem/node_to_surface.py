@@ -218,7 +218,7 @@ class NodeToSurface:
         How a slave node's force reaches a deformable master's nodes: ``"nodal"`` (default)
         with the master face's shape functions at the node's projection, ``"mortar"`` with
         mortar weights over the slave faces around the node, measured at the start of each
-        increment (docs/theory.md §2.3: the contact patch test on non-matching meshes;
+        increment (docs/theory.md §2.4: the contact patch test on non-matching meshes;
         linear faces only; nothing changes against a rigid obstacle).
     obstacle_index, n_obstacles : int
         For a rigid obstacle whose translation is an unknown of a

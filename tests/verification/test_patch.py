@@ -33,7 +33,7 @@ exactly (their forces spread over the faces, theory §2.1).  The recorded bands 
 asserted widened by 0.01, so a better method passes too; the force is always transmitted
 in full.
 
-With ``distribution = "mortar"`` (docs/theory.md §2.3) every slave pressure is 1 within
+With ``distribution = "mortar"`` (docs/theory.md §2.4) every slave pressure is 1 within
 1e-6 (measured: 1e-11) on linear faces, in 2D (quadrilaterals and triangles) and in 3D
 (hexahedra and tetrahedra), slave finer, coarser and offset (5 / 7 cells in 2D, 5 / 3 in
 3D: only the corners' nodes coincide), frictionless, stick and slip, and the slave

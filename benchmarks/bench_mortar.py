@@ -1,0 +1,178 @@
+"""What the mortar distribution of the slave forces costs and changes (issue #26 item 2).
+
+    python benchmarks/bench_mortar.py            # ~5 min, writes its RESULTS.md section
+    python benchmarks/bench_mortar.py --no-results
+
+Each scene runs with ``[[contact]] distribution = "nodal"`` (plain node-to-surface) and
+``"mortar"`` (docs/theory.md §2.4), serial, MUMPS:
+
+* the contact patch test (``reference.meshes.stacked``, frictionless, pressure 1, defaults)
+  at a size where the times mean something: 2D quadrilaterals 40 / 60 cells per side
+  (lower / upper), 3D hexahedra 12 / 16;
+* ``demos/hertz_sphere_block.toml``: the elastic sphere (slave, the finer mesh) pressed on
+  an elastic block, 4 increments; nodal pressures against Hertz for the measured load;
+* ``demos/ironing.toml``: a stiff die dragged over a soft block (mu = 0.3, 4 + 64
+  increments; the block is the slave): the die's reaction along the drag.
+
+Reported: CPU seconds of the run, Newton iterations, contact CPU per iteration (search and
+pairing + evaluation and assembly, the solver's own timers), the CPU of the mortar weights
+(``MortarDistribution.update``, once per increment and per cutback), and the pressures.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _bench as B  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+TITLE = "Mortar distribution of the slave forces: cost and effect (issue #26 item 2)"
+
+
+class _WeightsClock:
+    """CPU seconds and calls of ``MortarDistribution.update`` (wrapped while alive)."""
+
+    def __enter__(self):
+        from dolfinx_friction.fem.mortar_distribution import MortarDistribution
+        self.cls, self.original = MortarDistribution, MortarDistribution.update
+        self.cpu, self.calls = 0.0, 0
+
+        def timed(inner, *args):
+            c0 = time.process_time()
+            try:
+                return self.original(inner, *args)
+            finally:
+                self.cpu += time.process_time() - c0
+                self.calls += 1
+        MortarDistribution.update = timed
+        return self
+
+    def __exit__(self, *exc):
+        self.cls.update = self.original
+
+
+def _numbers(scene) -> tuple:
+    with _WeightsClock() as clock:
+        result, n = B.timed_run(scene)
+    contact = n["phases"]["contact_search"] + n["phases"]["contact_assembly"]
+    return result, n, contact / max(n["newton"], 1), clock
+
+
+def _row(label: str, distribution: str, n: dict, contact: float, clock, extra: list) -> list:
+    weights = (f"{clock.cpu:.3f} ({clock.calls})" if distribution == "mortar" else "-")
+    return [label, distribution, f"{n['dofs']:,}", n["newton"], f"{n['cpu']:.1f}",
+            f"{1e3 * contact:.1f}", weights, *extra]
+
+
+def patch(rows: list) -> None:
+    from dolfinx_friction.reference import meshes
+    from dolfinx_friction.reference.compare import contact_state
+    from dolfinx_friction.scene.model import BC, Body, ContactPair, Load, Output, Scene, Step
+    for dim, cells in ((2, (40, 60)), (3, (12, 16))):
+        mesh = meshes.stacked(B.work_dir("mortar") / f"stack{dim}.msh", *cells, dim=dim)
+
+        def roller(group: str, axis: int) -> BC:
+            return BC(group, tuple(0.0 if i == axis else None for i in range(dim)))
+        bcs = [roller("upper_x0", 0), roller("lower_bottom", dim - 1), roller("lower_x0", 0)]
+        bcs += [roller("upper_y0", 1), roller("lower_y0", 1)] if dim == 3 else []
+        for distribution in ("nodal", "mortar"):
+            scene = Scene(mesh=mesh, bodies=tuple(Body(b, 1000.0, 0.3) for b in
+                                                  ("lower", "upper")),
+                          contacts=(ContactPair("upper_bottom", "lower_top",
+                                                distribution=distribution),),
+                          steps=(Step("press", bcs=tuple(bcs),
+                                      loads=(Load("upper_top", pressure=1.0),)),),
+                          output=Output(fields=False, contact_table=False))
+            result, n, contact, clock = _numbers(scene)
+            p = contact_state(result)["pressure"]
+            label = f"patch {dim}D, {cells[0]} / {cells[1]} cells"
+            rows.append(_row(label, distribution, n, contact, clock,
+                             [f"pressures {p.min():.6f} - {p.max():.6f}"]))
+            print(rows[-1], flush=True)
+
+
+def hertz(rows: list) -> None:
+    from dolfinx_friction.reference.analytic import (effective_modulus, hertz_sphere,
+                                                     hertz_sphere_pressure)
+    from dolfinx_friction.reference.compare import contact_state
+    from dolfinx_friction.scene.toml import load_scene
+    demo = B.demo_module("hertz_sphere")
+    for distribution in ("nodal", "mortar"):
+        scene = load_scene(ROOT / "demos" / "hertz_sphere_block.toml",
+                           [f"contact.0.distribution={distribution}"])
+        result, n, contact, clock = _numbers(scene)
+        st = contact_state(result)
+        F = 4.0 * abs(result.increments[-1].reactions["sphere_top"][2])
+        E_star = effective_modulus(demo.E, demo.NU, demo.E, demo.NU)
+        a, p0, _ = hertz_sphere(F, demo.R, E_star)
+        closed = st["status"] != 0
+        r = np.linalg.norm(st["X"][closed, :2], axis=1)
+        p = st["pressure"][closed]
+        centre = p[np.argmin(r)]
+        inner = r < 0.8 * a
+        worst = np.abs(p[inner] - hertz_sphere_pressure(r[inner], F, demo.R, E_star)).max()
+        rows.append(_row("hertz_sphere_block", distribution, n, contact, clock,
+                         [f"centre node {100 * (centre / p0 - 1):+.1f} %, within 0.8 a "
+                          f"{100 * worst / p0:.1f} % of p0"]))
+        print(rows[-1], flush=True)
+
+
+def ironing(rows: list) -> dict:
+    from dolfinx_friction.scene.toml import load_scene
+    drag = {}
+    for distribution in ("nodal", "mortar"):
+        scene = load_scene(ROOT / "demos" / "ironing.toml",
+                           [f"contact.0.distribution={distribution}"])
+        result, n, contact, clock = _numbers(scene)
+        last = result.increments[-1].step  # the drag
+        R = np.array([inc.reactions["die_top"] for inc in result.increments if inc.step == last])
+        drag[distribution] = R
+        steady = R[len(R) // 4:]  # after the die has started to slide
+        ratio = np.abs(steady[:, 0] / steady[:, 1])
+        rows.append(_row("ironing", distribution, n, contact, clock,
+                         [f"|F_x / F_y| in the slide {ratio.mean():.4f} +- {ratio.std():.4f}"
+                          f" (min {ratio.min():.4f}, max {ratio.max():.4f})"]))
+        print(rows[-1], flush=True)
+    return drag
+
+
+def main() -> None:
+    parser = B.argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--no-results", action="store_true")
+    args = parser.parse_args()
+    m = B.machine()
+    rows: list = []
+    patch(rows)
+    hertz(rows)
+    drag = ironing(rows)
+    nodal, mortar = drag["nodal"], drag["mortar"]
+    change = np.abs(mortar - nodal).max(axis=0) / np.abs(nodal).max(axis=0)
+    body = "\n".join([
+        "`benchmarks/bench_mortar.py`: each scene with "
+        "`[[contact]] distribution = \"nodal\"` (plain node-to-surface) and `\"mortar\"` "
+        "(theory §2.4), serial, MUMPS, defaults otherwise.",
+        "",
+        f"* {B.machine_line(m, B.load_average())}",
+        "* CPU = CPU seconds of the whole run (set-up included, mesh generation excluded); "
+        "contact / it = CPU of pairing, evaluation and assembly of the contact per Newton "
+        "iteration; weights = CPU seconds of all `MortarDistribution.update` calls (their "
+        "number: one per increment, cutbacks included).",
+        "",
+        B.table(["scene", "distribution", "dofs", "Newton its", "CPU [s]", "contact / it [ms]",
+                 "weights [s] (calls)", "result"], rows, align="llrrrrrl"),
+        "",
+        "Ironing: the die's reaction along the drag with mortar weights differs from plain "
+        f"node-to-surface by at most {100 * change[0]:.2f} % (F_x) and {100 * change[1]:.2f} "
+        "% (F_y) of its largest value over the 64 drag increments.",
+    ])
+    print(body)
+    if not args.no_results:
+        B.write_section(TITLE, body)
+
+
+if __name__ == "__main__":
+    main()
