@@ -115,7 +115,8 @@ class ContactAssembly:
         """The elements' forces (n, nodes, d), tangents (n, nodes, d, nodes, d) and round-off
         (n, nodes * d) on their own nodes: without the slave node's rows where its force
         spreads over its star, without the master face's rows where the mortar weights
-        hand it to the master (:meth:`_spread_blocks`)."""
+        hand it to the master (:meth:`_spread_blocks`; a slave node without weights keeps
+        them)."""
         f, K, roundoff = el.result.f, el.result.K, el.roundoff
         inter, d = self.interaction, self.gdim
         if self._spreads():
@@ -123,7 +124,8 @@ class ContactAssembly:
         if inter.slaves.distribution is not None:
             f[:, -1], K[:, -1], roundoff[:, -d:] = 0.0, 0.0, 0.0
         if inter.mortar is not None:
-            f[:, :-1], K[:, :-1], roundoff[:, :-d] = 0.0, 0.0, 0.0
+            mortar = inter.mortar.covered[el.slave]  # the others: nodal (no weights)
+            f[mortar, :-1], K[mortar, :-1], roundoff[mortar, :-d] = 0.0, 0.0, 0.0
         return f, K, roundoff
 
     def _spread_blocks(self) -> list[tuple]:

@@ -51,9 +51,12 @@ class MortarDistribution:
         #: (n, width) system nodes of the master nodes each owned slave node's force
         #: reaches, -1 beyond the last
         self.nodes = np.full((len(slaves), 0), -1, dtype=np.int64)
-        #: (n, width) the weights ``W_km`` (rows sum to 1 where the node meets the
+        #: (n, width) the weights ``W_km`` (rows sum to 1 where the node's faces meet the
         #: master, 0 elsewhere), set by :meth:`update`
         self.weights = np.zeros(self.nodes.shape)
+        #: (n,) whether the node has weights; one without (its faces met no master face
+        #: at the increment's start) hands its force over as with the nodal distribution
+        self.covered = np.zeros(len(slaves), dtype=bool)
 
     def update(self, x_slave: np.ndarray, x_master: np.ndarray) -> bool:
         """The weights with the slave body's local nodes at ``x_slave`` (n_local, gdim) and
@@ -79,6 +82,7 @@ class MortarDistribution:
         value = np.concatenate([r[2] for r in received])
         before = self.nodes
         self.nodes, self.weights = _rows(self._slaves, k, j, value)
+        self.covered = self.weights.sum(axis=1) > 0.0
         return not np.array_equal(before, self.nodes)
 
     def _near_master_faces(self, xs: np.ndarray, x_master: np.ndarray
@@ -122,26 +126,36 @@ class MortarDistribution:
                 -W[:, :, None, None, None] * tangent[:, None])
 
 
+def _sizes(x: np.ndarray) -> np.ndarray:
+    """The largest distance of a face node from its face's centroid (n,) (faces
+    (n, nn, gdim))."""
+    return np.linalg.norm(x - x.mean(axis=1, keepdims=True), axis=2).max(axis=1, initial=0.0)
+
+
 def _largest(x: np.ndarray) -> float:
-    """The largest distance of a face node from its face's centroid (faces (n, nn, gdim))."""
-    if not len(x):
-        return 0.0
-    return float(np.linalg.norm(x - x.mean(axis=1, keepdims=True), axis=2).max())
+    return float(_sizes(x).max(initial=0.0))
 
 
 def _facing_pairs(slave: FaceType, xs: np.ndarray, master: FaceType, xm: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray]:
-    """(slave face, master face) pairs that may overlap: centroids closer than the two
-    faces' sizes, normals facing each other."""
+    """(slave face, master face) pairs that may overlap: normals facing each other,
+    centroids closer than 1.5 times the sum of the two faces' sizes, the slave centroid
+    within that sum of the master face's plane (farther faces are open: their nodes hand
+    their forces over as with the nodal distribution until the next increment)."""
     if not len(xs) or not len(xm):
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     c_s, c_m = xs.mean(axis=1), xm.mean(axis=1)
-    reach = _largest(xs) + _largest(xm)
-    near = cKDTree(c_m).query_ball_point(c_s, 1.5 * reach)
+    size_s, size_m = _sizes(xs), _sizes(xm)
+    near = cKDTree(c_m).query_ball_point(c_s, 1.5 * (size_s + size_m.max()))
     s = np.repeat(np.arange(len(xs)), [len(n) for n in near])
-    m = np.concatenate([np.asarray(n, dtype=np.int64) for n in near])
-    facing = np.einsum("nd,nd->n", _normals(slave, xs)[s], _normals(master, xm)[m]) < 0.0
-    return s[facing], m[facing]
+    m = np.concatenate([np.asarray(n, dtype=np.int64) for n in near] + [np.zeros(0, np.int64)])
+    n_m = _normals(master, xm)
+    n_m /= np.linalg.norm(n_m, axis=1)[:, None]
+    reach = size_s[s] + size_m[m]
+    gap = np.abs(np.einsum("nd,nd->n", c_s[s] - c_m[m], n_m[m]))
+    keep = ((np.einsum("nd,nd->n", _normals(slave, xs)[s], n_m[m]) < 0.0)
+            & (np.linalg.norm(c_s[s] - c_m[m], axis=1) <= 1.5 * reach) & (gap <= reach))
+    return s[keep], m[keep]
 
 
 def _normals(face: FaceType, x: np.ndarray) -> np.ndarray:

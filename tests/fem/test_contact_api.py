@@ -251,6 +251,36 @@ def test_jacobian_on_a_turning_obstacle_matches_central_differences(case):
     assert err < 1e-7
 
 
+def test_mortar_node_without_weights_hands_its_force_over_nodally():
+    """A slave node whose faces met no master face at the increment's start (no weights)
+    gives the master the nodal shares of its force: the residual of the plain
+    node-to-surface pair where no node has weights."""
+    problem, contact, g = two_bodies(mu=0.0, distribution="nodal")
+    press_and_slide(problem, contact, g, depth=0.02, slide=0.01, increments=(1, 1))
+    mortar, contact_m, g_m = two_bodies(mu=0.0, distribution="mortar")
+    g_m.value[:] = g.value
+    x = mortar.x
+    x.setArray(problem.x.getArray())
+    contact_m.begin(x)
+    contact_m.update(x)
+    assert MPI.COMM_WORLD.allreduce(int(contact_m._interaction.mortar.covered.sum())) > 0
+    b_with = x.duplicate()
+    residual_at(mortar, contact_m, x, b_with)
+    weights = contact_m._interaction.mortar  # as if no face had met the master at the start
+    weights.weights[:], weights.covered[:] = 0.0, False
+    contact_m._evaluated_at = None
+    b_nodal, b_without = x.duplicate(), x.duplicate()
+    contact.begin(problem.x)
+    residual_at(problem, contact, problem.x, b_nodal)
+    residual_at(mortar, contact_m, x, b_without)
+    force = np.abs(contact.state().normal_force).max(initial=0.0)
+    force = MPI.COMM_WORLD.allreduce(force, op=MPI.MAX)  # the scale of the contact rows
+    b_without.axpy(-1.0, b_nodal)
+    assert b_without.norm(PETSc.NormType.INFINITY) < 1e-10 * force
+    b_with.axpy(-1.0, b_nodal)
+    assert b_with.norm(PETSc.NormType.INFINITY) > 1e-3 * force  # the weights do act
+
+
 def box_3d(x0, z0, width, height, n, cell):
     """A box [x0, x0 + width]^2 x [z0, z0 + height] of n x n x max(n // 2, 1) cells with its
     bottom face tagged BOTTOM and top face TOP, and its linear-elastic residual."""
