@@ -114,10 +114,11 @@ def hertz(rows: list) -> None:
         p = st["pressure"][closed]
         centre = p[np.argmin(r)]
         inner = r < 0.8 * a
-        worst = np.abs(p[inner] - hertz_sphere_pressure(r[inner], F, demo.R, E_star)).max()
+        error = (p[inner] - hertz_sphere_pressure(r[inner], F, demo.R, E_star)) / p0
         rows.append(_row("hertz_sphere_block", distribution, n, contact, clock,
-                         [f"centre node {100 * (centre / p0 - 1):+.1f} %, within 0.8 a "
-                          f"{100 * worst / p0:.1f} % of p0"]))
+                         [f"centre node {100 * (centre / p0 - 1):+.1f} %, within 0.8 a: "
+                          f"largest {100 * np.abs(error).max():.1f} %, rms "
+                          f"{100 * np.sqrt(np.mean(error ** 2)):.1f} % of p0"]))
         print(rows[-1], flush=True)
 
 
@@ -145,6 +146,7 @@ def main() -> None:
     parser.add_argument("--no-results", action="store_true")
     args = parser.parse_args()
     m = B.machine()
+    patch([])  # warm-up: numba kernels, forms (not timed)
     rows: list = []
     patch(rows)
     hertz(rows)
@@ -165,9 +167,12 @@ def main() -> None:
         B.table(["scene", "distribution", "dofs", "Newton its", "CPU [s]", "contact / it [ms]",
                  "weights [s] (calls)", "result"], rows, align="llrrrrrl"),
         "",
-        "Ironing: the die's reaction along the drag with mortar weights differs from plain "
-        f"node-to-surface by at most {100 * change[0]:.2f} % (F_x) and {100 * change[1]:.2f} "
-        "% (F_y) of its largest value over the 64 drag increments.",
+        "Ironing (the soft block is the slave, the die 1000 times stiffer the master): the "
+        "die's reaction along the drag with mortar weights differs from plain "
+        f"node-to-surface by at most {change[0]:.1e} (F_x) and {change[1]:.1e} (F_y) of its "
+        "largest value over the 64 drag increments: on so stiff a master where its nodes "
+        "take the force hardly matters. Hertz sphere on a block: the error of the nodal "
+        "pressures is that of the mesh with either (rms within 0.8 a in the result column).",
     ])
     print(body)
     if not args.no_results:

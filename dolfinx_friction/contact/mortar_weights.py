@@ -1,4 +1,4 @@
-"""Mortar integrals of linear slave faces against linear master faces (docs/theory.md §2.4).
+"""Mortar integrals of linear slave faces against master faces (docs/theory.md §2.4).
 
 For a slave face ``S`` and a master face ``M`` the integrals
 
@@ -11,22 +11,26 @@ share ``int N_a ds`` of the slave node (partition of unity).  The overlap is fou
 segmentation: in 2D the slave segment is cut at the projections of the master nodes, in
 3D the projected master polygon is clipped against the slave polygon
 (Sutherland-Hodgman, both convex) and the clipped polygon cut into a fan of triangles.
-Gauss rules exact for the product of two linear functions on a flat interface: 2 points
-per segment piece, the 6-point degree-4 triangle rule (bilinear x bilinear on
-parallelograms).  Pure numpy, batched over (slave face, master face) pairs.
+Master faces may be quadratic (L3, T6, Q9: their polygon is that of their corners, so
+their edges are taken straight); quadratic slave faces enter as their linear sub-faces
+(:data:`~dolfinx_friction.contact.slave_weights.SUBFACES`).  Gauss rules exact for the
+products on a flat interface: 2 points per segment piece (up to cubics), the 6-point
+degree-4 triangle rule against linear masters (bilinear x bilinear on parallelograms), a
+collapsed 4 x 4 Gauss rule (degree 6) against quadratic ones.  Pure numpy, batched over
+(slave face, master face) pairs.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from dolfinx_friction.contact.projection import project
-from dolfinx_friction.contact.shapes import (Array, FaceType, gauss_line, surface_vector,
-                                             triangle_rule)
+from dolfinx_friction.contact.shapes import (Array, FaceType, collapsed_triangle_rule,
+                                             gauss_line, surface_vector, triangle_rule)
 
-#: the linear face types the integrals are defined for
+#: the slave face types the integrals are defined for (linear)
 LINEAR_FACES = ("L2", "T3", "Q4")
-# a face's vertices in cyclic order (counter-clockwise about its surface vector)
-_CYCLE = {"T3": [0, 1, 2], "Q4": [0, 1, 3, 2]}
+# a face's corners in cyclic order (counter-clockwise about its surface vector)
+_CYCLE = {"T3": [0, 1, 2], "T6": [0, 1, 2], "Q4": [0, 1, 3, 2], "Q9": [0, 1, 3, 2]}
 
 
 def mortar_integrals(slave: FaceType, x_slave: Array, master: FaceType,
@@ -35,9 +39,8 @@ def mortar_integrals(slave: FaceType, x_slave: Array, master: FaceType,
     area in 3D] of the pairs of slave faces with node coordinates ``x_slave``
     (n, nn_s, gdim) and master faces ``x_master`` (n, nn_m, gdim), row by row; 0 where
     they do not overlap."""
-    for face in (slave, master):
-        if face.name not in LINEAR_FACES:
-            raise ValueError(f"mortar integrals need linear faces, not {face.name}")
+    if slave.name not in LINEAR_FACES:
+        raise ValueError(f"mortar integrals need linear slave faces, not {slave.name}")
     n = len(x_slave)
     out = np.zeros((n, slave.n_nodes, master.n_nodes))
     if n == 0:
@@ -45,7 +48,7 @@ def mortar_integrals(slave: FaceType, x_slave: Array, master: FaceType,
     if slave.fdim == 1:
         pair, x, xi_s, w = _segment_points(x_slave, x_master)
     else:
-        pair, x, xi_s, w = _polygon_points(slave, x_slave, x_master)
+        pair, x, xi_s, w = _polygon_points(slave, x_slave, master, x_master)
     if len(pair) == 0:
         return out
     N_s = slave.evaluate(xi_s)[0]
@@ -73,7 +76,7 @@ def _segment_points(x_slave: Array, x_master: Array
     return np.repeat(pair, len(w)), x.reshape(-1, 2), xi.reshape(-1, 1), weight.ravel()
 
 
-def _polygon_points(slave: FaceType, x_slave: Array, x_master: Array
+def _polygon_points(slave: FaceType, x_slave: Array, master: FaceType, x_master: Array
                     ) -> tuple[np.ndarray, Array, Array, Array]:
     """3D: quadrature points of the overlaps of slave faces (n, nn_s, 3) with master faces
     (n, nn_m, 3) projected onto the slave face's plane: pair index (q,), point (q, 3),
@@ -92,15 +95,15 @@ def _polygon_points(slave: FaceType, x_slave: Array, x_master: Array
         return np.einsum("nkd,nad->nka", x - c[:, None], frame)
 
     clip = plane(x_slave[:, _CYCLE[slave.name]])  # counter-clockwise, convex
-    n_master = x_master.shape[1]
-    poly = plane(x_master[:, _CYCLE["T3" if n_master == 3 else "Q4"]])
-    reverse = _signed_area(poly, np.full(n, n_master)) < 0.0  # the master faces the slave
+    corners = len(_CYCLE[master.name])
+    poly = plane(x_master[:, _CYCLE[master.name]])
+    reverse = _signed_area(poly, np.full(n, corners)) < 0.0  # the master faces the slave
     poly[reverse] = poly[reverse, ::-1]
-    count = np.full(n, n_master)
+    count = np.full(n, corners)
     for j in range(clip.shape[1]):
         poly, count = _clip(poly, count, clip[:, j], clip[:, (j + 1) % clip.shape[1]])
-    # a fan of triangles (v0, v_i, v_i+1) and the degree-4 rule on each
-    pts, wts = triangle_rule()
+    # a fan of triangles (v0, v_i, v_i+1) and a rule of degree 4 (6) on each
+    pts, wts = triangle_rule() if master.name in LINEAR_FACES else collapsed_triangle_rule(4)
     i = np.arange(1, max(poly.shape[1] - 1, 1))
     tri, fan = np.nonzero(i[None, :] + 1 < count[:, None])
     fan = i[fan]

@@ -184,6 +184,16 @@ def triangle_rule() -> tuple[Array, Array]:
     return np.array(pts), np.array([wa] * 3 + [wb] * 3)
 
 
+def collapsed_triangle_rule(n: int) -> tuple[Array, Array]:
+    """An n x n Gauss rule collapsed onto the unit triangle (Duffy), exact for polynomials
+    of degree 2n - 2."""
+    p, w = np.polynomial.legendre.leggauss(n)
+    u, v = 0.5 * (p + 1.0), 0.5 * (p + 1.0)
+    U, V = np.meshgrid(u, v, indexing="ij")
+    weights = 0.25 * np.outer(w, w) * (1.0 - U)
+    return np.stack([U.ravel(), (V * (1.0 - U)).ravel()], axis=-1), weights.ravel()
+
+
 _t6_edge, _t6_vertex = 332.0 / 999.0, 1.0 / 999.0
 
 FACE_TYPES: dict[str, FaceType] = {

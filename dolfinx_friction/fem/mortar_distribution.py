@@ -21,8 +21,9 @@ import numpy as np
 from mpi4py import MPI
 from scipy.spatial import cKDTree
 
-from dolfinx_friction.contact.mortar_weights import LINEAR_FACES, mortar_integrals
-from dolfinx_friction.contact.shapes import FaceType, surface_vector
+from dolfinx_friction.contact.mortar_weights import mortar_integrals
+from dolfinx_friction.contact.shapes import FACE_TYPES, FaceType, surface_vector
+from dolfinx_friction.contact.slave_weights import SUBFACES, is_quadratic
 from dolfinx_friction.fem.numbering import BodyField
 from dolfinx_friction.fem.slave_distribution import owner_ranks
 from dolfinx_friction.fem.surfaces import MasterFaces
@@ -31,17 +32,19 @@ from dolfinx_friction.fem.surfaces import MasterFaces
 class MortarDistribution:
     """The mortar weights of the owned slave nodes of one contact pair on this rank.
 
-    ``field``: the slave body; ``face``: its (linear) face type; ``facet_nodes``
-    (n_faces, nn): local nodes of the slave faces this rank holds; ``slaves`` (n,): the
-    system node numbers of the slave nodes this rank owns; ``master``: the master faces
-    this rank holds.
+    ``field``: the slave body; ``face``: its face type (quadratic faces enter as their
+    linear sub-faces, whose shape functions ``L_k`` take the place of ``N_k``, as in the
+    slave areas: docs/theory.md §2.1); ``facet_nodes`` (n_faces, nn): local nodes of the
+    slave faces this rank holds; ``slaves`` (n,): the system node numbers of the slave nodes
+    this rank owns; ``master``: the master faces this rank holds.
     """
 
     def __init__(self, field: BodyField, face: FaceType, facet_nodes: np.ndarray,
                  slaves: np.ndarray, master: MasterFaces):
-        for f in (face, master.face):
-            if f.name not in LINEAR_FACES:
-                raise ValueError(f"the mortar distribution needs linear faces, not {f.name}")
+        if is_quadratic(face):
+            sub, corners = SUBFACES[face.name]
+            facet_nodes = facet_nodes[:, np.array(corners)].reshape(-1, len(corners[0]))
+            face = FACE_TYPES[sub]
         self.comm: MPI.Comm = field.V.mesh.comm
         self.face, self.master = face, master
         self._facet_nodes = facet_nodes
@@ -70,7 +73,7 @@ class MortarDistribution:
         owner = np.broadcast_to(self._owner[s][:, :, None], integrals.shape).ravel()
         j = np.broadcast_to(m_sys[m][:, None, :], integrals.shape).ravel()
         value = integrals.ravel()
-        keep = value > 0.0
+        keep = value != 0.0  # (negative at the corners of quadratic masters)
         k, owner, j, value = k[keep], owner[keep], j[keep], value[keep]
         order = np.argsort(owner, kind="stable")
         ends = np.cumsum(np.bincount(owner, minlength=self.comm.size))

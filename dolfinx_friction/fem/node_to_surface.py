@@ -44,7 +44,6 @@ from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.errors import ContactSetupError
 from dolfinx_friction.fem.axisymmetric import section_fault
 from dolfinx_friction.fem.contact_assembly import ContactAssembly
-from dolfinx_friction.contact.mortar_weights import LINEAR_FACES
 from dolfinx_friction.fem.contact_settings import CALCULIX, ContactSettings
 from dolfinx_friction.fem.mortar_distribution import MortarDistribution
 from dolfinx_friction.fem.numbering import BodyField, DofLayout
@@ -219,7 +218,8 @@ class NodeToSurface:
         with the master face's shape functions at the node's projection, ``"mortar"`` with
         mortar weights over the slave faces around the node, measured at the start of each
         increment (docs/theory.md §2.4: the contact patch test on non-matching meshes;
-        linear faces only; nothing changes against a rigid obstacle).
+        quadratic slave faces then spread their nodes' forces over the faces as on a rigid
+        obstacle, §2.1; nothing changes against a rigid obstacle).
     obstacle_index, n_obstacles : int
         For a rigid obstacle whose translation is an unknown of a
         :class:`~dolfinx_friction.BlockProblem` with ``obstacles=n_obstacles`` (force- or
@@ -303,22 +303,17 @@ class NodeToSurface:
                                              axisymmetric)
             # each facet once over all ranks: the ones this rank owns
             master_side = master_faces(self._master_field, "master")
-        # quadratic slave faces spread their nodes' forces on rigid obstacles only (§2.1)
-        slaves = SlaveNodes(slave_field, "slave", subfaces=rigid)
+        # quadratic slave faces spread their nodes' forces on rigid obstacles, and with the
+        # mortar distribution (§2.1, §2.4)
+        by_mortar = given.distribution == "mortar" and not rigid
+        slaves = SlaveNodes(slave_field, "slave", subfaces=rigid or by_mortar)
         self._slave_field = slave_field
         # a node's area sums its faces' shares in an order that depends on the partition:
         # 12 digits make h, and the defaults scaled with it, the same on any number of ranks
         self.spacing = float(f"{np.median(np.concatenate(comm.allgather(slaves.spacing))):.12g}")
         self.params = self._parameters(given, law, E)
-        mortar = None
-        if given.distribution == "mortar" and not rigid:
-            faces = {slaves.face.name, master_side.face.name}
-            if faces - set(LINEAR_FACES):
-                raise ContactSetupError(
-                    f"{name}: distribution = \"mortar\" needs linear faces (degree 1 bodies), "
-                    f"not {'/'.join(sorted(faces - set(LINEAR_FACES)))}")
-            mortar = MortarDistribution(slave_field, slaves.face, slaves.facet_nodes,
-                                        slaves.nodes, master_side)
+        mortar = (MortarDistribution(slave_field, slaves.face, slaves.facet_nodes, slaves.nodes,
+                                     master_side) if by_mortar else None)
         self._interaction = ContactInteraction(comm, name, self.params.element, slaves,
                                                master_side, self.gdim,
                                                self.params.pairing_iterations, mortar)

@@ -34,8 +34,9 @@ asserted widened by 0.01, so a better method passes too; the force is always tra
 in full.
 
 With ``distribution = "mortar"`` (docs/theory.md §2.4) every slave pressure is 1 within
-1e-6 (measured: 1e-11) on linear faces, in 2D (quadrilaterals and triangles) and in 3D
-(hexahedra and tetrahedra), slave finer, coarser and offset (5 / 7 cells in 2D, 5 / 3 in
+1e-6 (measured: 2e-11), in 2D (quadrilaterals and triangles) and in 3D (hexahedra and
+tetrahedra), P1 and P2 (L3, Q9, T6: the slave nodes' areas and forces of the linear
+sub-faces, theory §2.1), slave finer, coarser and offset (5 / 7 cells in 2D, 5 / 3 in
 3D: only the corners' nodes coincide), frictionless, stick and slip, and the slave
 tractions are tau within 1e-6 (measured: 3e-12).  Plain node-to-surface with friction, 2D
 P1, slave finer: pressures 0.916-1.046 (quadrilaterals) and 0.923-1.039 (triangles),
@@ -44,7 +45,6 @@ cases take one increment: the mortar weights are measured at the increment's sta
 the slave and master footprints still coincide; later the slave overhangs the master by
 the relative tangential displacement (here 2e-5 to 2e-3) and the load on the master is no
 longer uniform by the geometry itself (2 increments in stick: pressures within 3e-5).
-Quadratic faces with mortar weights are refused (not done).
 """
 from __future__ import annotations
 
@@ -128,7 +128,8 @@ MU, TAU_STICK, PUSH = 0.3, 0.1, 0.002
 
 
 def _with_friction(shared_dir, dim: int, tets: bool, cells: tuple[int, int], slip: bool,
-                   distribution: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+                   distribution: str, degree: int = 1
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Pressures, tangential tractions, statuses (all ranks) and the total normal force of
     the slave nodes under the uniform stress sigma_zz = -1, sigma_xz = tau (stick: tau = 0.1
     on the top; slip: the top pushed along x, tau = mu), in one increment (the slave and
@@ -146,7 +147,8 @@ def _with_friction(shared_dir, dim: int, tets: bool, cells: tuple[int, int], sli
         bcs.append(BC("upper_top", (PUSH,) + (0.0,) * (dim - 2) + (None,)))
     else:
         loads.append(Load("upper_top", traction=vector(tau, -1.0)))
-    scene = Scene(mesh=mesh, bodies=tuple(Body(name, 1000.0, 0.0) for name in ("lower", "upper")),
+    scene = Scene(mesh=mesh, bodies=tuple(Body(name, 1000.0, 0.0, degree=degree)
+                                          for name in ("lower", "upper")),
                   contacts=(ContactPair("upper_bottom", "lower_top", mu=MU,
                                         distribution=distribution),),
                   steps=(Step("press", increments=1, bcs=tuple(bcs), loads=tuple(loads)),),
@@ -157,28 +159,32 @@ def _with_friction(shared_dir, dim: int, tets: bool, cells: tuple[int, int], sli
 
 
 @pytest.mark.parametrize("case", list(MORTAR_CELLS[2]))
+@pytest.mark.parametrize("degree", [1, 2])
 @pytest.mark.parametrize("dim, tets", [(2, False), (2, True), (3, False), (3, True)])
-def test_patch_passes_with_the_mortar_distribution(shared_dir, dim, tets, case):
-    """Frictionless: every slave pressure 1 within 1e-6."""
-    p = _pressures(shared_dir, dim, tets, 1, MORTAR_CELLS[dim][case], distribution="mortar")
-    print(f"\n{dim}D {'simplices' if tets else 'quads/hexes'} P1, {case}, mortar: slave "
+def test_patch_passes_with_the_mortar_distribution(shared_dir, dim, tets, degree, case):
+    """Frictionless: every slave pressure 1 within 1e-6 (P2: the slave areas and forces
+    of the linear sub-faces, theory §2.1)."""
+    p = _pressures(shared_dir, dim, tets, degree, MORTAR_CELLS[dim][case],
+                   distribution="mortar")
+    print(f"\n{dim}D {'simplices' if tets else 'quads/hexes'} P{degree}, {case}, mortar: slave "
           f"pressures {p.min():.12f} - {p.max():.12f}")
     np.testing.assert_allclose(p, 1.0, atol=1e-6)
 
 
 @pytest.mark.parametrize("slip", [False, True], ids=["stick", "slip"])
+@pytest.mark.parametrize("degree", [1, 2])
 @pytest.mark.parametrize("dim, tets, case", [(2, tets, case) for tets in (False, True)
                                              for case in MORTAR_CELLS[2]]
                          + [(3, False, "offset"), (3, True, "offset")])
 def test_patch_with_friction_passes_with_the_mortar_distribution(shared_dir, dim, tets, case,
-                                                                 slip):
+                                                                 degree, slip):
     """Stick and slip: every slave pressure 1 and every slave traction tau within 1e-6,
     every node in the expected state (in 3D the offset meshes only, for time)."""
     p, t, status, total = _with_friction(shared_dir, dim, tets, MORTAR_CELLS[dim][case], slip,
-                                         "mortar")
+                                         "mortar", degree)
     assert total == pytest.approx(1.0, rel=1e-9)
     tau = MU if slip else TAU_STICK
-    print(f"\n{dim}D {'simplices' if tets else 'quads/hexes'} P1, {case}, "
+    print(f"\n{dim}D {'simplices' if tets else 'quads/hexes'} P{degree}, {case}, "
           f"{'slip' if slip else 'stick'}, mortar: pressures {p.min():.12f} - {p.max():.12f}, "
           f"tractions {t.min():.12f} - {t.max():.12f}")
     assert set(status.tolist()) == {SLIP if slip else STICK}
