@@ -27,19 +27,22 @@ from dolfinx_friction.contact.projection import project
 from dolfinx_friction.contact.shapes import (Array, FaceType, collapsed_triangle_rule,
                                              gauss_line, surface_vector, triangle_rule)
 
-#: the slave face types the integrals are defined for (linear)
+#: the linear face types
 LINEAR_FACES = ("L2", "T3", "Q4")
+#: the slave face types the integrals are defined for: linear, and straight L3 segments
+SLAVE_FACES = LINEAR_FACES + ("L3",)
 # a face's corners in cyclic order (counter-clockwise about its surface vector)
 _CYCLE = {"T3": [0, 1, 2], "T6": [0, 1, 2], "Q4": [0, 1, 3, 2], "Q9": [0, 1, 3, 2]}
 
 
 def mortar_integrals(slave: FaceType, x_slave: Array, master: FaceType,
-                     x_master: Array) -> Array:
+                     x_master: Array, revolved: bool = False) -> Array:
     """The integrals ``I_ab`` (n, nn_s, nn_m) [length in 2D (per unit thickness),
-    area in 3D] of the pairs of slave faces with node coordinates ``x_slave``
-    (n, nn_s, gdim) and master faces ``x_master`` (n, nn_m, gdim), row by row; 0 where
-    they do not overlap."""
-    if slave.name not in LINEAR_FACES:
+    area in 3D; ``revolved``: of the surfaces the 2D segments sweep about the axis
+    ``x[..., 0] = 0``, weight ``2 pi r``] of the pairs of slave faces with node coordinates
+    ``x_slave`` (n, nn_s, gdim) and master faces ``x_master`` (n, nn_m, gdim), row by row;
+    0 where they do not overlap."""
+    if slave.name not in SLAVE_FACES:
         raise ValueError(f"mortar integrals need linear slave faces, not {slave.name}")
     n = len(x_slave)
     out = np.zeros((n, slave.n_nodes, master.n_nodes))
@@ -51,6 +54,8 @@ def mortar_integrals(slave: FaceType, x_slave: Array, master: FaceType,
         pair, x, xi_s, w = _polygon_points(slave, x_slave, master, x_master)
     if len(pair) == 0:
         return out
+    if revolved:
+        w = 2.0 * np.pi * x[:, 0] * w
     N_s = slave.evaluate(xi_s)[0]
     N_m = master.evaluate(project(master, x, x_master[pair]).xi)[0]
     np.add.at(out, pair, w[:, None, None] * N_s[:, :, None] * N_m[:, None, :])

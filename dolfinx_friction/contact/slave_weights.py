@@ -2,8 +2,9 @@
 
 Linear faces (L2, T3, Q4) keep CalculiX's lumped shares: node ``k`` of face ``f`` holds
 ``w_k A_f`` and its contact force acts on node ``k`` alone; so do quadratic faces that
-touch a deformable master (the master would receive node ``k``'s force at one point, which
-breaks the patch test: docs/theory.md §2.1).
+touch a deformable master with the nodal distribution (the master would receive node
+``k``'s force at one point, which breaks the patch test: docs/theory.md §2.1; the mortar
+distribution hands it over consistently, §2.4).
 
 A quadratic face (L3, T6, Q9) is split into linear sub-faces (:data:`SUBFACES`: 2
 segments, 4 triangles, 4 quadrilaterals through its mid-side and centre nodes).  Node

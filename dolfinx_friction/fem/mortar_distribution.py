@@ -36,12 +36,15 @@ class MortarDistribution:
     linear sub-faces, whose shape functions ``L_k`` take the place of ``N_k``, as in the
     slave areas: docs/theory.md §2.1); ``facet_nodes`` (n_faces, nn): local nodes of the
     slave faces this rank holds; ``slaves`` (n,): the system node numbers of the slave nodes
-    this rank owns; ``master``: the master faces this rank holds.
+    this rank owns; ``master``: the master faces this rank holds.  On an axisymmetric body
+    the integrals are over the revolved faces, and its (2D) quadratic faces keep their own
+    shape functions, as its slave areas do.
     """
 
     def __init__(self, field: BodyField, face: FaceType, facet_nodes: np.ndarray,
                  slaves: np.ndarray, master: MasterFaces):
-        if is_quadratic(face):
+        self._revolved = field.axisymmetric
+        if is_quadratic(face) and not self._revolved:
             sub, corners = SUBFACES[face.name]
             facet_nodes = facet_nodes[:, np.array(corners)].reshape(-1, len(corners[0]))
             face = FACE_TYPES[sub]
@@ -68,7 +71,8 @@ class MortarDistribution:
         xs = x_slave[self._facet_nodes]
         xm, m_sys = self._near_master_faces(xs, x_master)
         s, m = _facing_pairs(self.face, xs, self.master.face, xm)
-        integrals = mortar_integrals(self.face, xs[s], self.master.face, xm[m])
+        integrals = mortar_integrals(self.face, xs[s], self.master.face, xm[m],
+                                     self._revolved)
         k = np.broadcast_to(self._face_sys[s][:, :, None], integrals.shape).ravel()
         owner = np.broadcast_to(self._owner[s][:, :, None], integrals.shape).ravel()
         j = np.broadcast_to(m_sys[m][:, None, :], integrals.shape).ravel()

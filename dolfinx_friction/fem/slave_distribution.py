@@ -1,8 +1,8 @@
 """Where a slave node's contact force acts on quadratic slave faces, over all ranks.
 
-On linear faces, and against a deformable master, a slave node's force acts on the node
-itself.  On quadratic faces against a rigid obstacle
-(:mod:`~dolfinx_friction.contact.slave_weights`) node ``k``'s force ``F_k`` acts on the
+On linear faces, and against a deformable master with the nodal distribution, a slave
+node's force acts on the node itself.  On quadratic faces against a rigid obstacle, or with
+the mortar distribution (:mod:`~dolfinx_friction.contact.slave_weights`), node ``k``'s force ``F_k`` acts on the
 nodes ``i`` of the faces around it, ``f_i = T_ik F_k`` with ``sum_i T_ik = 1``: its
 *star*.  The faces around an owned slave node may lie on other ranks; their columns of
 ``C`` are sent to the node's owner.  The weights are measured on the faces as deformed at

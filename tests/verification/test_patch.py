@@ -37,7 +37,8 @@ With ``distribution = "mortar"`` (docs/theory.md §2.4) every slave pressure is 
 1e-6 (measured: 2e-11), in 2D (quadrilaterals and triangles) and in 3D (hexahedra and
 tetrahedra), P1 and P2 (L3, Q9, T6: the slave nodes' areas and forces of the linear
 sub-faces, theory §2.1), slave finer, coarser and offset (5 / 7 cells in 2D, 5 / 3 in
-3D: only the corners' nodes coincide), frictionless, stick and slip, and the slave
+3D: only the corners' nodes coincide), frictionless, stick and slip, and on axisymmetric
+P1 sections (two stacked disks, the load pi; nodal: 0.74-1.06), and the slave
 tractions are tau within 1e-6 (measured: 3e-12).  Plain node-to-surface with friction, 2D
 P1, slave finer: pressures 0.916-1.046 (quadrilaterals) and 0.923-1.039 (triangles),
 tractions 0.066-0.125 (stick, tau = 0.1) and 0.275-0.314 (slip, tau = 0.3).  The friction
@@ -72,21 +73,24 @@ CELLS = {2: {"matching": (6, 6), "slave finer": (4, 6), "slave coarser": (6, 4)}
 
 
 def _pressures(shared_dir, dim: int, tets: bool, degree: int, cells: tuple[int, int],
-               rigid: bool = False, distribution: str = "nodal") -> np.ndarray:
+               rigid: bool = False, distribution: str = "nodal",
+               plane: str = "strain") -> np.ndarray:
     """The slave nodal pressures (all ranks) under the pressure 1, frictionless, and the
-    check that the slave nodes carry the whole load."""
+    check that the slave nodes carry the whole load (``plane = "axisymmetric"``: 2D
+    sections of two stacked disks about x = 0, the load pi)."""
     mesh = meshes.stacked(shared_dir / "stack.msh", *cells, dim=dim, tets=tets)
 
     def roller(group: str, axis: int) -> BC:
         return BC(group, tuple(0.0 if i == axis else None for i in range(dim)))
     bcs = [roller("upper_x0", 0)] + ([roller("upper_y0", 1)] if dim == 3 else [])
     if rigid:  # the upper block alone on a rigid plane where the lower block's top is
-        bodies = (Body("upper", 1000.0, 0.3, degree=degree),)
+        bodies = (Body("upper", 1000.0, 0.3, degree=degree, plane=plane),)
         obstacles = (Rigid("floor", "plane", point=(0.0,) * (dim - 1) + (0.5,),
                            normal=(0.0,) * (dim - 1) + (1.0,)),)
         master = "floor"
     else:
-        bodies = tuple(Body(name, 1000.0, 0.3, degree=degree) for name in ("lower", "upper"))
+        bodies = tuple(Body(name, 1000.0, 0.3, degree=degree, plane=plane)
+                       for name in ("lower", "upper"))
         obstacles, master = (), "lower_top"
         bcs += [roller("lower_bottom", dim - 1), roller("lower_x0", 0)]
         bcs += [roller("lower_y0", 1)] if dim == 3 else []
@@ -96,7 +100,8 @@ def _pressures(shared_dir, dim: int, tets: bool, degree: int, cells: tuple[int, 
                               loads=(Load("upper_top", pressure=1.0),)),),
                   output=Output(fields=False, contact_table=False))
     st = contact_state(run(scene, write=False))
-    assert st["normal_force"].sum() == pytest.approx(1.0, rel=1e-6)  # footprint 1
+    footprint = np.pi if plane == "axisymmetric" else 1.0
+    assert st["normal_force"].sum() == pytest.approx(footprint, rel=1e-6)
     return st["pressure"]
 
 
@@ -167,6 +172,18 @@ def test_patch_passes_with_the_mortar_distribution(shared_dir, dim, tets, degree
     p = _pressures(shared_dir, dim, tets, degree, MORTAR_CELLS[dim][case],
                    distribution="mortar")
     print(f"\n{dim}D {'simplices' if tets else 'quads/hexes'} P{degree}, {case}, mortar: slave "
+          f"pressures {p.min():.12f} - {p.max():.12f}")
+    np.testing.assert_allclose(p, 1.0, atol=1e-6)
+
+
+@pytest.mark.parametrize("case", list(MORTAR_CELLS[2]))
+@pytest.mark.parametrize("tets", [False, True])
+def test_axisymmetric_patch_passes_with_the_mortar_distribution(shared_dir, tets, case):
+    """Two stacked disks (axisymmetric P1 sections), the weights over the revolved faces:
+    every slave pressure 1 within 1e-6 (nodal: 0.74-1.06, slave finer, quadrilaterals)."""
+    p = _pressures(shared_dir, 2, tets, 1, MORTAR_CELLS[2][case], distribution="mortar",
+                   plane="axisymmetric")
+    print(f"\naxisymmetric {'triangles' if tets else 'quads'} P1, {case}, mortar: slave "
           f"pressures {p.min():.12f} - {p.max():.12f}")
     np.testing.assert_allclose(p, 1.0, atol=1e-6)
 
