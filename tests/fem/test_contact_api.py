@@ -302,6 +302,47 @@ def box_3d(x0, z0, width, height, n, cell):
     return V, tags, u, F
 
 
+def test_mortar_weights_do_not_depend_on_the_partition():
+    """Each owned slave node's weights (integrated on the ranks that hold its faces, summed
+    on its owner) equal those of all slave faces against all master faces on one rank: a
+    hexahedral block on a tetrahedral foundation, on 1, 2 or 3 ranks."""
+    from dolfinx_friction.contact.mortar_weights import mortar_integrals
+    Vb, tb, ub, Fb = box_3d(0.25, 0.3, 0.5, 0.2, 4, mesh.CellType.hexahedron)
+    Vf, tf, uf, Ff = box_3d(0.0, 0.0, 1.0, 0.3, 5, mesh.CellType.tetrahedron)
+    contact = NodeToSurface(Surface(Vb, tb, BOTTOM), Surface(Vf, tf, TOP), E=E,
+                            distribution="mortar")
+    problem = BlockProblem([Fb, Ff], [ub, uf], [], [contact])
+    contact.begin(problem.x)
+    inter = contact._interaction
+    comm = MPI.COMM_WORLD
+    slaves, master = inter.slaves, inter.master
+    field = slaves.field
+    faces = comm.allgather((field.nodes[slaves.facet_nodes], field.X[slaves.facet_nodes]))
+    s_nodes = np.concatenate([f[0] for f in faces])
+    s_X = np.concatenate([f[1] for f in faces])
+    faces = comm.allgather((master.nodes, master.X))
+    m_nodes = np.concatenate([f[0] for f in faces])
+    m_X = np.concatenate([f[1] for f in faces])
+    s, m = np.divmod(np.arange(len(s_X) * len(m_X)), len(m_X))
+    I = mortar_integrals(slaves.face, s_X[s], master.face, m_X[m])
+    k = np.broadcast_to(s_nodes[s][:, :, None], I.shape).ravel()
+    j = np.broadcast_to(m_nodes[m][:, None, :], I.shape).ravel()
+    reference: dict = {}
+    for a, b, v in zip(k, j, I.ravel()):
+        if v:
+            reference.setdefault(a, {}).setdefault(b, 0.0)
+            reference[a][b] += v
+    weights = inter.mortar
+    assert weights.covered.all()
+    for node, row_nodes, row in zip(slaves.nodes, weights.nodes, weights.weights):
+        expected = reference[node]
+        total = sum(expected.values())
+        got = {b: w for b, w in zip(row_nodes, row) if b >= 0}
+        assert set(got) == set(expected)
+        for b, w in got.items():
+            assert w == pytest.approx(expected[b] / total, abs=1e-13)
+
+
 @pytest.mark.parametrize("mu", [0.0, 0.3])
 def test_jacobian_mortar_in_3d_matches_central_differences(mu):
     """The mortar distribution in 3D: a hexahedral block (Q4 slave faces) pressed onto a
