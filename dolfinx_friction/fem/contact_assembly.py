@@ -7,7 +7,8 @@ may fill (the matrix pattern of the contact, found among node pairs) and each ta
 entry's slot among them, the Dirichlet rows and columns left out; on quadratic slave faces
 against a rigid obstacle the blocks through which a slave node's force spreads over its
 faces (:mod:`~dolfinx_friction.fem.slave_distribution`), with the mortar distribution the
-blocks through which it reaches the master (:mod:`~dolfinx_friction.fem.mortar_distribution`).  Every cache is kept while the
+blocks through which it reaches the master
+(:mod:`~dolfinx_friction.fem.mortar_distribution`).  Every cache is kept while the
 candidates (or the conditions) are the same objects.
 """
 from __future__ import annotations

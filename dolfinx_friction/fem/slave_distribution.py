@@ -2,12 +2,12 @@
 
 On linear faces, and against a deformable master with the nodal distribution, a slave
 node's force acts on the node itself.  On quadratic faces against a rigid obstacle, or with
-the mortar distribution (:mod:`~dolfinx_friction.contact.slave_weights`), node ``k``'s force ``F_k`` acts on the
-nodes ``i`` of the faces around it, ``f_i = T_ik F_k`` with ``sum_i T_ik = 1``: its
-*star*.  The faces around an owned slave node may lie on other ranks; their columns of
-``C`` are sent to the node's owner.  The weights are measured on the faces as deformed at
-the start of each increment (with the slave areas) and held within it, so the contact
-tangent stays the exact derivative of the contact forces.
+the mortar distribution (:mod:`~dolfinx_friction.contact.slave_weights`), node ``k``'s
+force ``F_k`` acts on the nodes ``i`` of the faces around it, ``f_i = T_ik F_k`` with
+``sum_i T_ik = 1``: its *star*.  The faces around an owned slave node may lie on other
+ranks; their columns of ``C`` are sent to the node's owner.  The weights are measured on
+the faces as deformed at the start of each increment (with the slave areas) and held
+within it, so the contact tangent stays the exact derivative of the contact forces.
 """
 from __future__ import annotations
 

@@ -324,11 +324,11 @@ def test_mortar_weights_do_not_depend_on_the_partition():
     m_nodes = np.concatenate([f[0] for f in faces])
     m_X = np.concatenate([f[1] for f in faces])
     s, m = np.divmod(np.arange(len(s_X) * len(m_X)), len(m_X))
-    I = mortar_integrals(slaves.face, s_X[s], master.face, m_X[m])
-    k = np.broadcast_to(s_nodes[s][:, :, None], I.shape).ravel()
-    j = np.broadcast_to(m_nodes[m][:, None, :], I.shape).ravel()
+    integrals = mortar_integrals(slaves.face, s_X[s], master.face, m_X[m])
+    k = np.broadcast_to(s_nodes[s][:, :, None], integrals.shape).ravel()
+    j = np.broadcast_to(m_nodes[m][:, None, :], integrals.shape).ravel()
     reference: dict = {}
-    for a, b, v in zip(k, j, I.ravel()):
+    for a, b, v in zip(k, j, integrals.ravel()):
         if v:
             reference.setdefault(a, {}).setdefault(b, 0.0)
             reference[a][b] += v
