@@ -25,12 +25,13 @@ from dolfinx_friction.contact.mortar_weights import mortar_integrals
 from dolfinx_friction.contact.shapes import FACE_TYPES, FaceType, surface_vector
 from dolfinx_friction.contact.slave_weights import SUBFACES, is_quadratic
 from dolfinx_friction.fem.numbering import BodyField
-from dolfinx_friction.fem.slave_distribution import owner_ranks
+from dolfinx_friction.fem.slave_distribution import SpreadRows, owner_ranks
 from dolfinx_friction.fem.surfaces import MasterFaces
 
 
-class MortarDistribution:
-    """The mortar weights of the owned slave nodes of one contact pair on this rank.
+class MortarDistribution(SpreadRows):
+    """The mortar weights of the owned slave nodes of one contact pair on this rank: the
+    master rows of their elements get ``-W_km F_k`` (:meth:`~SpreadRows.spread`).
 
     ``field``: the slave body; ``face``: its face type (quadratic faces enter as their
     linear sub-faces, whose shape functions ``L_k`` take the place of ``N_k``, as in the
@@ -40,6 +41,8 @@ class MortarDistribution:
     the integrals are over the revolved faces, and its (2D) quadratic faces keep their own
     shape functions, as its slave areas do.
     """
+
+    sign = -1.0
 
     def __init__(self, field: BodyField, face: FaceType, facet_nodes: np.ndarray,
                  slaves: np.ndarray, master: MasterFaces):
@@ -112,25 +115,6 @@ class MortarDistribution:
         shape = x_master.shape[1:]
         return (np.concatenate([f[0] for f in incoming]).reshape(-1, *shape),
                 np.concatenate([f[1] for f in incoming]).reshape(-1, shape[0]))
-
-    def pattern(self, slave: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Node pairs (rows, cols), each (m,), that elements of the slave nodes ``slave``
-        (n,) with nodes ``cols`` (n, c) (-1: none) couple through the master rows."""
-        rows = self.nodes[slave]
-        r = np.broadcast_to(rows[:, :, None], rows.shape + cols.shape[1:])
-        c = np.broadcast_to(cols[:, None, :], r.shape)
-        keep = (r >= 0) & (c >= 0)
-        return r[keep], c[keep]
-
-    def spread(self, slave: np.ndarray, force: np.ndarray, tangent: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The master rows of elements of the slave nodes ``slave`` (n,) whose slave-node
-        force is ``force`` (n, d) with derivative ``tangent`` (n, d, c, d) over the
-        elements' nodes: master nodes (n, width), forces ``-W F`` (n, width, d) and
-        tangents (n, width, d, c, d)."""
-        W = self.weights[slave]
-        return (self.nodes[slave], -W[:, :, None] * force[:, None, :],
-                -W[:, :, None, None, None] * tangent[:, None])
 
 
 def _sizes(x: np.ndarray) -> np.ndarray:

@@ -27,7 +27,36 @@ def owner_ranks(field: BodyField, nodes: np.ndarray) -> np.ndarray:
     return owner[np.searchsorted(ranges[owner, 0], nodes, side="right") - 1]
 
 
-class SlaveDistribution:
+class SpreadRows:
+    """Rows of the system that the owned slave nodes' forces reach besides the elements'
+    own: per slave node the nodes :attr:`nodes` (n, width; -1 beyond the last) and weights
+    :attr:`weights` (n, width); node ``i`` of slave node ``k``'s row gets ``sign * w_ki F_k``
+    (``sign``: +1 where it replaces the slave node's row, -1 the master's)."""
+
+    sign = 1.0
+    nodes: np.ndarray
+    weights: np.ndarray
+
+    def pattern(self, slave: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Node pairs (rows, cols), each (m,), that elements of the slave nodes ``slave``
+        (n,) with nodes ``cols`` (n, c) (-1: none) couple through these rows."""
+        rows = self.nodes[slave]
+        r = np.broadcast_to(rows[:, :, None], rows.shape + cols.shape[1:])
+        c = np.broadcast_to(cols[:, None, :], r.shape)
+        keep = (r >= 0) & (c >= 0)
+        return r[keep], c[keep]
+
+    def spread(self, slave: np.ndarray, force: np.ndarray, tangent: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """These rows of elements of the slave nodes ``slave`` (n,) whose slave-node force
+        is ``force`` (n, d) with derivative ``tangent`` (n, d, c, d) over the elements'
+        nodes: row nodes (n, width), forces (n, width, d) and tangents (n, width, d, c, d)."""
+        W = self.sign * self.weights[slave]
+        return (self.nodes[slave], W[:, :, None] * force[:, None, :],
+                W[:, :, None, None, None] * tangent[:, None])
+
+
+class SlaveDistribution(SpreadRows):
     """The stars of the owned slave nodes of one contact pair on this rank.
 
     ``field``: the slave body; ``face``: its (quadratic) face type; ``facet_nodes``
@@ -83,22 +112,3 @@ class SlaveDistribution:
         weights = weights.reshape(self.nodes.shape)
         total = weights.sum(axis=1, keepdims=True)
         self.weights = np.divide(weights, total, out=np.zeros_like(weights), where=total > 0)
-
-    def pattern(self, slave: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Node pairs (rows, cols), each (m,), that elements of the slave nodes ``slave``
-        (n,) with nodes ``cols`` (n, c) (-1: none) couple through the stars."""
-        rows = self.nodes[slave]
-        r = np.broadcast_to(rows[:, :, None], rows.shape + cols.shape[1:])
-        c = np.broadcast_to(cols[:, None, :], r.shape)
-        keep = (r >= 0) & (c >= 0)
-        return r[keep], c[keep]
-
-    def spread(self, slave: np.ndarray, force: np.ndarray, tangent: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The stars' rows of elements of the slave nodes ``slave`` (n,) whose slave-node
-        force is ``force`` (n, d) with derivative ``tangent`` (n, d, c, d) over the
-        elements' nodes: star nodes (n, width), forces (n, width, d) and tangents
-        (n, width, d, c, d)."""
-        T = self.weights[slave]
-        return (self.nodes[slave], T[:, :, None] * force[:, None, :],
-                T[:, :, None, None, None] * tangent[:, None])
