@@ -443,6 +443,17 @@ def test_overrides_of_the_contract(tmp_path):
     assert scene.steps[0].bcs[0].u == (0.0, 0.0, None)
 
 
+def test_distribution_of_the_slave_forces(tmp_path):
+    """distribution: "nodal" by default (scene files of versions 1 and 2 unchanged),
+    "mortar" from the file or --set."""
+    path = write(tmp_path, EXAMPLE)
+    assert load_scene(path).contacts[0].distribution == "nodal"
+    assert load_scene(path, ["contact.0.distribution=mortar"]).contacts[0].distribution \
+        == "mortar"
+    path = write(tmp_path, to_toml(edited("example", put("contact.0.distribution", "mortar"))))
+    assert load_scene(path).contacts[0].distribution == "mortar"
+
+
 def test_calculix_penalty_and_stick_slope(tmp_path):
     """K and stick_slope: a number, or "calculix" (CalculiX's 50 E and E/2; also as a bare
     --set value); absent, the version-2 defaults 10 E/h and E/h once h is known."""
