@@ -183,6 +183,7 @@ def timed_run(scene, comm=None, max_increments: int | None = None, keep_solver: 
         "cpu_per_rank": comm.allgather(cpu),
         "load": [load0, load_average()],
         "rss_mib": comm.allreduce(peak_rss_mib(), op=MPI.MAX),
+        "linear_solves": s.linear_solves,
     }
     return result, numbers
 

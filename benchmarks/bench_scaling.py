@@ -55,7 +55,7 @@ def worker(args: list[str]) -> None:
     B.emit(num)
 
 
-def chart(runs: dict, machine: dict, n: int) -> Path:
+def chart(runs: dict, machine: dict, n: int, linear: str = "direct") -> Path:
     plt = B.pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), dpi=100)
     ranks = sorted(runs)
@@ -80,10 +80,11 @@ def chart(runs: dict, machine: dict, n: int) -> Path:
         ax.legend(fontsize=8)
         ax.grid(alpha=0.3, axis="y")
     dofs = best(runs[ranks[0]], "wall")["dofs"]
-    fig.suptitle(f"strong scaling, two_boxes n = {n}, {dofs:,} dofs, mu = 0.3 "
+    fig.suptitle(f"strong scaling, two_boxes n = {n}, {dofs:,} dofs, mu = 0.3, "
+                 + ("MUMPS" if linear == "direct" else f"[solver] {linear}") + " "
                  f"({machine['nproc']} cores, shared)", fontsize=10)
     fig.tight_layout()
-    path = B.FIGURES / "scaling.png"
+    path = B.FIGURES / ("scaling.png" if linear == "direct" else f"scaling_{linear}.png")
     fig.savefig(path)
     plt.close(fig)
     return path
@@ -120,12 +121,13 @@ def report(runs, machine, load_end, quick, figure, n, slide, linear="direct") ->
     trs = []
     for r in sorted(runs):
         for run in runs[r]:
-            trs.append([r, f"{run['dofs']:,}", run["newton"]]
+            krylov = (run.get("linear_solves") or {}).get("krylov_iterations")
+            trs.append([r, f"{run['dofs']:,}", run["newton"], "-" if krylov is None else krylov]
                        + [f"{phase(run, k, 'wall'):.3g} / {phase(run, k, 'cpu'):.3g}"
                           for k in list(PHASES) + ["total"]]
                        + [" / ".join(f"{x:.0f}" for x in run["rss_per_rank"]),
                           f"{run['load'][0]:.1f} -> {run['load'][1]:.1f}"])
-    out.append(B.table(["ranks", "dofs", "Newton its"]
+    out.append(B.table(["ranks", "dofs", "Newton its", "Krylov its"]
                        + [f"{k.replace('_', ' ')} wall / CPU [s]" for k in PHASES]
                        + ["total wall / CPU [s]", "peak RSS per rank [MiB]", "load"], trs))
     out.append("")
@@ -190,7 +192,7 @@ def main(argv=None) -> None:
                   + f" rss {run['rss_per_rank']} load {run['load']}", flush=True)
             if args.json:
                 Path(args.json).write_text(json.dumps(runs, indent=1))
-    figure = chart(runs, machine, n)
+    figure = chart(runs, machine, n, args.solver)
     text = report(runs, machine, B.load_average(), args.quick, figure, n, args.slide,
                   args.solver)
     if args.profile:

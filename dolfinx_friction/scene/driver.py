@@ -61,6 +61,9 @@ class RunSummary:
     wall: float = 0.0
     timers: Timers = field(default_factory=Timers)
     failure: str = ""
+    #: the linear solver's work: ``preconditioner_setups``, ``krylov_iterations``,
+    #: ``condensed_solves`` (empty before a run; None if no solver ran)
+    linear_solves: Optional[dict] = field(default_factory=dict)
 
 
 class StepLoading:
@@ -241,11 +244,20 @@ class Solver:
                           + (f": {exc.reason})" if exc.reason else ")"))
                 summary.failure = reason
                 summary.wall = time.perf_counter() - start
+                summary.linear_solves = self._linear_solves()
                 raise ConvergenceError(reason, exc.increment, exc.t, exc.residual, exc.reason,
                                        exc.records, exc.cutbacks, exc.iterations) from None
         summary.converged = True
         summary.wall = time.perf_counter() - start
+        summary.linear_solves = self._linear_solves()
         return summary
+
+    def _linear_solves(self) -> Optional[dict]:
+        linear = self.linear
+        return None if linear is None else {
+            "preconditioner_setups": linear.factorisations,
+            "krylov_iterations": linear.krylov_iterations,
+            "condensed_solves": linear.condensed_solves}
 
     # ----------------------------------------------------------- reports
     def _report(self, index: int, name: str, record: IncrementRecord, wall: float) -> Increment:

@@ -138,12 +138,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         peak = comm.allreduce(peak_memory_mib(), op=MPI.MAX)
         if comm.rank != 0:
             return {}
-        linear = solver.linear
-        return {**provenance(problem, solver.reaction_groups(), linear),
-                "linear_solves": None if linear is None else {
-                    "preconditioner_setups": linear.factorisations,
-                    "krylov_iterations": linear.krylov_iterations,
-                    "condensed_solves": linear.condensed_solves},
+        return {**provenance(problem, solver.reaction_groups(), solver.linear),
+                "linear_solves": solver.summary.linear_solves,
                 "peak_memory_mib": peak, "warnings": list(warnings.values())}
 
     try:

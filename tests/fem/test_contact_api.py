@@ -19,6 +19,7 @@ from dolfinx_friction import (NO_ELEMENT, BlockProblem, ContactSetupError, Newto
                               SNESNewton, Surface, create_matrix, rigid_cylinder, rigid_plane,
                               rigid_sdf, rigid_sphere, snes_solve, solve_steps)
 from dolfinx_friction import _compat as compat
+from tests.finite_differences import random_directions, tangent_error
 
 E, NU = 1000.0, 0.3
 BOTTOM, TOP = 1, 2
@@ -92,30 +93,10 @@ def press_and_slide(problem, contact, g=None, depth=0.03, slide=0.02, increments
     return records + solve_steps(problem, drag, increments[1])
 
 
-def residual_at(problem, contact, x, b):
-    contact.update(x, pairing=False)
-    problem.residual(x, b)
-
-
-def central_difference(problem, contact, x, dv, h) -> PETSc.Vec:
-    """(R(x + h dv) - R(x - h dv)) / 2h, the pairing frozen."""
-    b_plus, b_minus = x.duplicate(), x.duplicate()
-    xp, xm = x.copy(), x.copy()
-    xp.axpy(h, dv)
-    xm.axpy(-h, dv)
-    residual_at(problem, contact, xp, b_plus)
-    residual_at(problem, contact, xm, b_minus)
-    b_plus.axpy(-1.0, b_minus)
-    b_plus.scale(1.0 / (2 * h))
-    return b_plus
-
-
 def fd_error(problem, contact, seed=0) -> float:
-    """max over 3 random directions of |J dv - central difference| / |J dv| at a perturbed
-    iterate (mixed stick/slip, pairing frozen).  A direction along which the residual has a
-    kink within the difference step (a node changing status, or crossing the law's cutoff)
-    is no test of a derivative: there the differences with steps h and h/2 disagree (by far
-    more than the 1e-7 the test allows), and another direction is drawn."""
+    """The worst error of the Jacobian against extrapolated central differences along 3
+    random directions without a kink (:mod:`tests.finite_differences`) at a perturbed
+    iterate (mixed stick/slip, pairing frozen)."""
     rng = np.random.default_rng(seed + MPI.COMM_WORLD.rank)
     start = problem.x.copy()
     n = start.getLocalSize()
@@ -127,24 +108,14 @@ def fd_error(problem, contact, seed=0) -> float:
         c.begin(x, start=start)
         c.update(x)
     A = problem.jacobian(x)
-    worst, smooth, Jdv = 0.0, 0, x.duplicate()
-    for _ in range(12):
-        dv = x.duplicate()
-        direction = rng.standard_normal(n)
-        direction[problem.constrained_rows] = 0.0  # their residual rows are held at zero
-        dv.setArray(direction)
-        h = 1e-6 * scale / dv.norm(PETSc.NormType.INFINITY)
-        A.mult(dv, Jdv)
-        fd, half = (central_difference(problem, contact, x, dv, step) for step in (h, h / 2))
-        half.axpy(-1.0, fd)
-        if half.norm() > 1e-7 * Jdv.norm():
-            continue  # a kink within the step
-        fd.axpy(-1.0, Jdv)
-        worst = max(worst, fd.norm() / Jdv.norm())
-        smooth += 1
-        if smooth == 3:
-            return worst
-    raise AssertionError("no smooth direction for the difference quotient in 12 draws")
+
+    def residual(y: PETSc.Vec) -> PETSc.Vec:
+        b = y.duplicate()
+        contact.update(y, pairing=False)
+        problem.residual(y, b)
+        return b
+    directions = random_directions(x, rng, held=problem.constrained_rows)
+    return tangent_error(residual, x, A, directions, 1e-6 * scale)
 
 
 def statuses(contact) -> set:
@@ -223,16 +194,7 @@ TURNING = {
 }
 
 
-#: under MPI the turning plane's residual is, in some runs, not smooth along any direction at
-#: the perturbed iterate (differences with h and h/2 apart by 1e-6..4e-4; serially never):
-#: not understood, said here and left to fail loudly if it stops happening
-FLAKY_UNDER_MPI = pytest.mark.xfail(MPI.COMM_WORLD.size > 1, strict=False,
-                                    reason="turning plane on several ranks: non-smooth residual "
-                                           "in some runs, not understood")
-
-
-@pytest.mark.parametrize("case", [pytest.param(c, marks=FLAKY_UNDER_MPI)
-                                  if c == "plane-about-a-point" else c for c in TURNING])
+@pytest.mark.parametrize("case", list(TURNING))
 def test_jacobian_on_a_turning_obstacle_matches_central_differences(case):
     """The slip against a rotating obstacle follows its material points: a constant of the
     increment, so the tangent stays exact (the FD check of the translating plane)."""
@@ -266,6 +228,9 @@ def test_mortar_node_without_weights_hands_its_force_over_nodally():
     contact_m.begin(x)
     contact_m.update(x)
     assert MPI.COMM_WORLD.allreduce(int(contact_m._interaction.mortar.covered.sum())) > 0
+    def residual_at(problem, contact, x, b):  # the pairing frozen
+        contact.update(x, pairing=False)
+        problem.residual(x, b)
     b_with = x.duplicate()
     residual_at(mortar, contact_m, x, b_with)
     weights = contact_m._interaction.mortar  # as if no face had met the master at the start
