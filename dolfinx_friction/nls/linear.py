@@ -47,7 +47,10 @@ system (a scene's ``[solver] linear = "auto"``).
 columns eliminated, of frictionless contact between linear bodies,
 :attr:`BlockProblem.symmetric`) factorises LDL^T (MUMPS, symmetric indefinite, from the
 upper triangle): half the flops and entries of LU (0.28 against 0.42 s on a 16k-dof 3D
-block).  The condensed path's ``K`` is factorised so whenever it is symmetric (linear
+block), on one rank: MUMPS's distributed LDL^T stopped on a zero pivot for about 1 in 6
+partitions of the Hertz cylinder demo on 3 ranks (the matrix symmetric to 6e-17, its LU
+fine; dolfinx 0.5's partitions differ from run to run), so several ranks factorise LU.
+The condensed path's ``K`` is factorised so whenever it is symmetric (linear
 bodies, friction or not).  Their counts are doubled to LU's for every decision above.
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
 default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
@@ -91,8 +94,8 @@ class LinearSolver:
         if reuse is None:
             reuse = options is None
         options = options or {}
-        defaults = {**(REUSE if reuse else DIRECT),
-                    **({"pc_type": "cholesky"} if symmetric and not options else {})}
+        ldlt = symmetric and not options and comm.size == 1  # see the module's docstring
+        defaults = {**(REUSE if reuse else DIRECT), **({"pc_type": "cholesky"} if ldlt else {})}
         # they stay while this solver may factorise (MUMPS reads its own then)
         own, written = private_options(prefix, {**defaults, **options})
         weakref.finalize(self, forget_options, written).atexit = False

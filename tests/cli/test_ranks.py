@@ -54,19 +54,9 @@ def test_every_demo_has_its_mesh():
         assert (DEMOS / mesh).exists(), scene
 
 
-#: A known defect, not understood: oversubscribed 3-rank runs of the Hertz scenes launched
-#: from the test suite stop (MUMPS reports a zero pivot in every cutback) or take another
-#: increment path in about half of the CI runs, standalone in about 1 of 10; never on 1 or
-#: 2 ranks.  Marked, not hidden: an xpass shows when it is gone.
-HERTZ_ON_3_RANKS = pytest.mark.xfail(strict=False, reason="Hertz scenes on 3 oversubscribed "
-                                     "ranks: intermittent MUMPS zero pivot (not understood)")
-
-
 @pytest.mark.parametrize("ranks", [2, 3])
 @pytest.mark.parametrize("scene", SCENES)
-def test_ranks_match_serial(scene, ranks, serial, tmp_path, request):
-    if ranks == 3 and scene.startswith("hertz"):
-        request.applymarker(HERTZ_ON_3_RANKS)
+def test_ranks_match_serial(scene, ranks, serial, tmp_path):
     history, contact = _run(scene, ranks, tmp_path / scene)
     serial_history, serial_contact = serial(scene)
     assert_same_history(history, serial_history)
