@@ -68,6 +68,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
+from dolfinx_friction.nls.free_rows import FreeRows
 
 DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 #: GMRES's relative residual with a kept factorisation, unless the caller asks otherwise
@@ -120,6 +121,9 @@ class LinearSolver:
         self.failure = ""
         self._condensed: Optional[Condensed] = None
         self.condensed_solves = 0
+        #: a factorisation (any package) solves on the free rows where they are given
+        self._factorises = pc.getType() in ("lu", "cholesky")
+        self._free_rows = FreeRows()
 
     @staticmethod
     def _new_ksp(comm, prefix: str) -> PETSc.KSP:
@@ -156,11 +160,20 @@ class LinearSolver:
         self.condensed_solves += 1
         return True
 
-    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL
-              ) -> bool:
+    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL,
+              constrained: Optional[np.ndarray] = None) -> bool:
         """Solve; returns False when the solver failed (:attr:`failure` says why).
         ``rtol``: the relative residual a Krylov solve stops at (GMRES on a kept
-        factorisation; a Krylov solver whose options do not fix ``ksp_rtol``)."""
+        factorisation; a Krylov solver whose options do not fix ``ksp_rtol``).
+        ``constrained``: owned local rows that are identity rows of ``J`` with zero
+        right-hand side (:attr:`BlockProblem.constrained_rows`); a factorisation then solves
+        on the other rows only (:class:`~dolfinx_friction.nls.free_rows.FreeRows`)."""
+        if constrained is not None and self._factorises:
+            return self._free_rows.solve(lambda A, b_, x_: self._solve(A, b_, x_, rtol),
+                                         J, b, x, constrained)
+        return self._solve(J, b, x, rtol)
+
+    def _solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float) -> bool:
         keep = (self.reuse and self._pays and not self._paused
                 and J.getSize() == self._factored_size)
         self._paused = max(self._paused - 1, 0)
