@@ -263,11 +263,12 @@ def create_vector(L):
     return dolfinx.fem.petsc.create_vector(L.function_spaces[0] if API_0_10 else L)
 
 
-def create_matrix(a):
+def create_matrix(a, blocked: bool = False):
     """An empty PETSc matrix with the sparsity of a compiled bilinear form, or (0.10+) of a
-    2-D list of them in dolfinx's block numbering."""
+    2-D list of them in dolfinx's block numbering; ``blocked``: of type ``baij`` (the
+    second argument is ``mat_type`` in 0.5, ``kind`` in 0.9+)."""
     import dolfinx.fem.petsc
-    return dolfinx.fem.petsc.create_matrix(a)
+    return dolfinx.fem.petsc.create_matrix(a, "baij" if blocked else None)
 
 
 def assemble_matrix_into(A, a, bcs=()) -> None:
