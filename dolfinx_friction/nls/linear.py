@@ -69,6 +69,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
 from dolfinx_friction.nls.free_rows import FreeRows
+from dolfinx_friction.nls.interior import Interior
 
 DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 #: GMRES's relative residual with a kept factorisation, unless the caller asks otherwise
@@ -124,6 +125,7 @@ class LinearSolver:
         #: a factorisation (any package) solves on the free rows where they are given
         self._factorises = pc.getType() in ("lu", "cholesky")
         self._free_rows = FreeRows()
+        self._interior: Optional[Interior] = None
 
     @staticmethod
     def _new_ksp(comm, prefix: str) -> PETSc.KSP:
@@ -161,17 +163,29 @@ class LinearSolver:
         return True
 
     def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL,
-              constrained: Optional[np.ndarray] = None) -> bool:
+              constrained: Optional[np.ndarray] = None,
+              constant: Optional[np.ndarray] = None) -> bool:
         """Solve; returns False when the solver failed (:attr:`failure` says why).
         ``rtol``: the relative residual a Krylov solve stops at (GMRES on a kept
         factorisation; a Krylov solver whose options do not fix ``ksp_rtol``).
         ``constrained``: owned local rows that are identity rows of ``J`` with zero
         right-hand side (:attr:`BlockProblem.constrained_rows`); a factorisation then solves
-        on the other rows only (:class:`~dolfinx_friction.nls.free_rows.FreeRows`)."""
-        if constrained is not None and self._factorises:
-            return self._free_rows.solve(lambda A, b_, x_: self._solve(A, b_, x_, rtol),
-                                         J, b, x, constrained)
-        return self._solve(J, b, x, rtol)
+        on the other rows only (:class:`~dolfinx_friction.nls.free_rows.FreeRows`).
+        ``constant`` (serial, with ``constrained``): free rows whose rows and columns are
+        the same in every ``J`` of the run (:meth:`BlockProblem.linear_interior`), condensed
+        out with their factorisation kept (:class:`~dolfinx_friction.nls.interior.Interior`)
+        where that path is taken."""
+        if constrained is None or not self._factorises:
+            return self._solve(J, b, x, rtol)
+        def solve(A, b_, x_):
+            return self._solve(A, b_, x_, rtol)
+        if constant is not None and len(constant):
+            if self._interior is None:
+                self._interior = Interior(self.ksp.getOptionsPrefix())
+            ok = self._interior.solve(solve, J, b, x, constrained, constant)
+            if ok is not None:
+                return ok
+        return self._free_rows.solve(solve, J, b, x, constrained)
 
     def _solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float) -> bool:
         keep = (self.reuse and self._pays and not self._paused

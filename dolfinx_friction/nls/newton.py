@@ -159,7 +159,8 @@ class Newton:
                 A = problem.jacobian(x, symmetric=solver.symmetric)
                 with problem.timers.measure("linear_solve"):
                     solved = solver.solve(A, b, dx, forcing(norm, trace.residuals[0], target),
-                                          problem.constrained_rows)
+                                          problem.constrained_rows,
+                                          problem.linear_interior())
             if not solved:
                 trace.backtracks.append(0)
                 trace.reason = self.linear.failure

@@ -19,7 +19,7 @@ from dolfinx_friction.scene.build import ContactProblem
 from dolfinx_friction.scene.driver import Solver
 from dolfinx_friction.nls import LinearSolver
 from dolfinx_friction.fem.surfaces import SlaveNodes, master_faces
-from dolfinx_friction.reference import meshes
+from dolfinx_friction.reference import cases, meshes
 
 
 def _csr_rows(A: PETSc.Mat, N: int) -> np.ndarray:
@@ -319,12 +319,14 @@ def test_kept_factorisation_gives_the_direct_answer(shared_dir, mu):
 
 
 def test_factorisation_on_the_free_rows_gives_the_whole_systems_step(shared_dir):
-    """A Neo-Hookean block on its foundation, off equilibrium: a factorisation given the
-    constrained rows solves on the others only (a matrix of the free rows' size) and
-    gives the step of the whole system's factorisation, zero in the constrained rows; the
-    same on every rank count."""
-    mesh = meshes.two_boxes(shared_dir / "boxes.msh")
-    _, solver = _solve(_boxes_scene(mesh, "neo-hookean", mu=0.3))
+    """A Neo-Hookean block on a linear foundation, off equilibrium: a factorisation given
+    the constrained rows solves on the others only (a matrix of the free rows' size), and
+    given also the foundation's interior (serial: the rows off the contact surface)
+    condenses it out (a matrix of the other free rows' size); both give the step of the
+    whole system's factorisation, zero in the constrained rows.  Under MPI the interior
+    is empty: the free rows' solve."""
+    scene = cases.press_shear_scene(meshes.blocks_on_foundation(shared_dir / "blocks.msh"))
+    _, solver = _solve(scene)
     system = solver.system
     rng = np.random.default_rng(system.comm.rank)
     values = system.x.getArray()
@@ -335,18 +337,25 @@ def test_factorisation_on_the_free_rows_gives_the_whole_systems_step(shared_dir)
         c.update(system.x)
     system.residual(system.x, system.b)
     J = system.jacobian(system.x)
+    interior = system.linear_interior()
+    count = system.comm.allreduce
+    assert (count(len(interior)) > 0) == (system.comm.size == 1)
+    held = count(len(system.constrained_rows))
     steps = []
-    for constrained in (None, system.constrained_rows):
+    for constrained, constant, size in (
+            (None, None, system.x.getSize()),
+            (system.constrained_rows, None, system.x.getSize() - held),
+            (system.constrained_rows, interior,
+             system.x.getSize() - held - count(len(interior)))):
         linear, dx = LinearSolver(system.comm, reuse=False), system.x.duplicate()
-        assert linear.solve(J, system.b, dx, constrained=constrained)
+        assert linear.solve(J, system.b, dx, constrained=constrained, constant=constant)
         steps.append(dx.getArray().copy())
-        size = linear.ksp.getOperators()[0].getSize()[0]
-        held = system.comm.allreduce(len(system.constrained_rows))
-        assert size == system.x.getSize() - (0 if constrained is None else held)
-    whole, reduced = steps
-    assert not reduced[system.constrained_rows].any()
+        assert linear.ksp.getOperators()[0].getSize()[0] == size
+    whole = steps[0]
     scale = system.comm.allreduce(np.abs(whole).max(), op=MPI.MAX)
-    np.testing.assert_allclose(reduced, whole, atol=1e-10 * scale)  # measured: 1.7e-15
+    for reduced in steps[1:]:
+        assert not reduced[system.constrained_rows].any()
+        np.testing.assert_allclose(reduced, whole, atol=1e-10 * scale)  # measured: 1.7e-15
 
 
 def test_live_solvers_keep_their_own_options(shared_dir):
