@@ -21,6 +21,8 @@ from typing import Callable, Optional
 import numpy as np
 from petsc4py import PETSc
 
+from dolfinx_friction.fem.pattern import csr_values
+
 __all__ = ["Interior", "SHARE"]
 
 #: ``D`` (|S|^2 entries) may take at most this share of the Jacobian's non-zeros.
@@ -125,9 +127,9 @@ class Interior:
 
     def _matrix(self, J: PETSc.Mat) -> PETSc.Mat:
         """``J_PP - D``, its pattern made once per pattern of ``J``."""
-        indptr, cols, values = J.getValuesCSR()
-        key = (J, len(cols))
-        if self._pattern is None or self._pattern[0] is not J or self._pattern[1] != len(cols):
+        key = (J, J.getInfo()["nz_allocated"])
+        if self._pattern is None or self._pattern[0] is not J or self._pattern[1] != key[1]:
+            indptr, cols, _ = J.getValuesCSR()
             position = np.full(J.getSize()[0], -1)
             position[self.P] = np.arange(len(self.P))
             r, c, slots = _csr_block(indptr, cols, self.P, position)
@@ -147,7 +149,7 @@ class Interior:
             self._pattern = key
         to, slots = self._from
         self._values[:] = self._minus_D
-        self._values[to] += values[slots]
+        self._values[to] += csr_values(J)[slots]
         self._B.assemble()  # the values changed (a factorisation is redone)
         return self._B
 

@@ -38,6 +38,15 @@ factorisation it keeps: once that preconditioned a solve); ``K`` is factorised o
 ``G``'s columns, at that path's back-solve flops, could pay (on a 35k-dof 3D block they
 cannot: 0.67 s of factorisation was spent for nothing).
 Serial only: under MPI the path above.
+A factorisation given the constrained rows (Newton gives them: identity rows with zero
+right-hand side) solves on the free rows only (:mod:`~dolfinx_friction.nls.free_rows`):
+MUMPS would otherwise order the held dofs with their neighbours (the one-layer ironing
+holds u_z on every node: a quarter of the flops, half the time).  Where a nonlinear body
+meets linear ones (serial), the linear bodies' interior is condensed out as well, its
+factorisation kept for the run (:mod:`~dolfinx_friction.nls.interior`).  A factorisation
+of a nonlinear body's Jacobian kept as GMRES's preconditioner (``reuse``) does not pay
+there: 10-18 GMRES iterations per Jacobian on the ironing, each a tenth of a fresh
+factorisation.
 An iterative solver (:data:`~dolfinx_friction.nls.defaults.ITERATIVE`: GMRES with
 algebraic multigrid, or any Krylov solver the options give without ``ksp_rtol``) stops at
 the relative residual Newton asks for each step (inexact Newton);
