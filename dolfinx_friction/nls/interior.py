@@ -55,6 +55,8 @@ class Interior:
         self._ksp: Optional[PETSc.KSP] = None
         self._pattern: Optional[tuple] = None  # (J, its non-zeros) the matrix was made for
         self._B: Optional[PETSc.Mat] = None
+        self.K_SI: Optional[PETSc.Mat] = None
+        self.K_IS: Optional[PETSc.Mat] = None
 
     def _set_up(self, J: PETSc.Mat, constrained: np.ndarray, interior: np.ndarray) -> None:
         """Factorise ``K_II``, compute ``D`` (when the rows changed)."""
@@ -77,6 +79,9 @@ class Interior:
         if not self._usable:
             return
         comm = PETSc.COMM_SELF
+        for old in (self.K_SI, self.K_IS):
+            if old is not None:
+                old.destroy()
         rows = PETSc.IS().createGeneral(self.I.astype(PETSc.IntType), comm=comm)
         srows = PETSc.IS().createGeneral(self.P[self.S].astype(PETSc.IntType), comm=comm)
         K_II = J.createSubMatrix(rows, rows)
