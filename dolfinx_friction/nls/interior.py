@@ -23,7 +23,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction.fem.pattern import csr_values
 
-__all__ = ["Interior", "SHARE"]
+__all__ = ["Interior"]
 
 #: ``D`` (|S|^2 entries) may take at most this share of the Jacobian's non-zeros.
 SHARE = 0.25

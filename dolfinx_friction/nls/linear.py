@@ -186,7 +186,8 @@ class LinearSolver:
         where that path is taken."""
         if constrained is None or not self._factorises:
             return self._solve(J, b, x, rtol)
-        def solve(A, b_, x_):
+
+        def solve(A: PETSc.Mat, b_: PETSc.Vec, x_: PETSc.Vec) -> bool:
             return self._solve(A, b_, x_, rtol)
         if constant is not None and len(constant):
             if self._interior is None:
@@ -197,6 +198,7 @@ class LinearSolver:
         return self._free_rows.solve(solve, J, b, x, constrained)
 
     def _solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float) -> bool:
+        """One solve of the system as given (with a kept factorisation where it pays)."""
         keep = (self.reuse and self._pays and not self._paused
                 and J.getSize() == self._factored_size)
         self._paused = max(self._paused - 1, 0)
