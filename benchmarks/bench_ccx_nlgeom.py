@@ -3,6 +3,8 @@
     python benchmarks/bench_ccx_nlgeom.py              # the two test cases + the full-size ironing
     python benchmarks/bench_ccx_nlgeom.py --quick      # the two test cases only
     python benchmarks/bench_ccx_nlgeom.py --no-results
+    python benchmarks/bench_ccx_nlgeom.py --no-results --save before.json  # (another checkout)
+    python benchmarks/bench_ccx_nlgeom.py --before before.json  # + a before/after table
 
 Cases (scenes and meshes from ``tests/verification/test_calculix_nlgeom.py``):
 
@@ -27,9 +29,11 @@ mesh against the finite-strain one.
 from __future__ import annotations
 
 import argparse
+import json
 import re
 import sys
 import time
+from pathlib import Path
 
 import _bench as B  # noqa: I001
 import numpy as np
@@ -88,6 +92,8 @@ def one_case(name: str, make, kind: str) -> dict:
             if rel > worst:
                 worst, where = rel, k
     row["worst"], row["worst_at"] = worst, where
+    row["reactions"] = {f"{k[0]},{k[1]}": {g: [float(c) for c in v] for g, v in r.items()}
+                        for k, r in ours_r.items()}
     row["ours_fig"], row["ccx_fig"] = figures(kind, ours_r), figures(kind, theirs_r)
     # the small-strain answer on the same mesh (ours)
     small = make("linear")
@@ -110,6 +116,39 @@ def _step_inc(k) -> str:
 
 def _versus(small: float, finite: float) -> str:
     return f"{small:.4g} vs {finite:.4g} ({100 * (small / finite - 1):+.1f} %)"
+
+
+def before_after(rows, before: dict) -> list[str]:
+    """A table of this run against ``before`` (rows saved by ``--save`` from another
+    checkout): CPU seconds and their ratio to ccx's in each run, Newton iterations, and
+    how far the reactions moved (the worst ``|R - R_before| / |R_before|``)."""
+    out = ["", f"Before / after (before: {before['commit']}, 1-min load "
+           f"{before['load']:.1f} at its end; both runs measure ccx themselves):", ""]
+    trs = []
+    for r in rows:
+        b = before["rows"].get(r["case"])
+        if b is None:
+            continue
+        moved = max(float(np.linalg.norm(np.subtract(v, b["reactions"][k][g]))
+                          / np.linalg.norm(b["reactions"][k][g]))
+                    for k, groups in r["reactions"].items() for g, v in groups.items())
+        o = r["ours"]
+        trs.append([r["case"], f"{b['cpu']:.2f} / {o['cpu']:.2f}",
+                    f"{b['ccx_cpu']:.2f} / {r['ccx_cpu']:.2f}",
+                    f"{b['cpu'] / b['ccx_cpu']:.2f} / {o['cpu'] / r['ccx_cpu']:.2f}",
+                    f"{b['newton']} / {o['newton']}", f"{moved:.1e}"])
+    out.append(B.table(["case", "our CPU [s] before / after", "ccx CPU [s] before / after",
+                        "CPU ratio to ccx before / after", "Newton its before / after",
+                        "max dR after vs before"], trs, "lrrrrr"))
+    return out
+
+
+def saved(rows, load: float, label: str) -> dict:
+    """What ``--save`` writes: the rows' times, iterations and reactions."""
+    return {"commit": label or B.machine()["commit"], "load": load,
+            "rows": {r["case"]: {"cpu": r["ours"]["cpu"], "ccx_cpu": r["ccx_cpu"],
+                                 "newton": r["ours"]["newton"], "reactions": r["reactions"]}
+                     for r in rows}}
 
 
 def report(rows, machine, load_end, quick) -> str:
@@ -183,6 +222,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--no-results", action="store_true")
+    ap.add_argument("--save", type=Path, help="write the rows (JSON) for a later --before")
+    ap.add_argument("--before", type=Path, help="rows saved by --save: a before/after table")
+    ap.add_argument("--label", default="", help="--save: the checkout's name (default: commit)")
     args = ap.parse_args(argv)
     from dolfinx_friction.reference import calculix
     if not calculix.ccx_available():
@@ -200,7 +242,12 @@ def main(argv=None) -> int:
               f"{r['ccx_solves']} solves | max dR {100 * r['worst']:.3f} % | "
               f"{r['ours_fig']} vs {r['ccx_fig']} | small {r['small_fig']} | "
               f"{time.perf_counter() - t0:.0f} s", flush=True)
-    text = report(rows, machine, B.load_average(), args.quick)
+    load_end = B.load_average()
+    text = report(rows, machine, load_end, args.quick)
+    if args.before:
+        text += "\n".join(["", *before_after(rows, json.loads(args.before.read_text()))])
+    if args.save:
+        args.save.write_text(json.dumps(saved(rows, load_end, args.label)))
     print(text)
     if not args.no_results:
         B.write_section("CalculiX NLGEOM", text)

@@ -106,6 +106,7 @@ class BlockProblem:
         self._prescribed_rows = np.zeros(0, dtype=np.int64)
         self._prescribed_values = np.zeros(0)
         self._constrained = self._bc_rows
+        self._interior: Optional[tuple] = None  # (constrained rows, linear_interior())
         self.gather()
         #: bodies whose residual dolfinx assembles (the others are K u)
         self._assembled = [k for k, body in enumerate(self.bodies) if not body.homogeneous]
@@ -214,6 +215,23 @@ class BlockProblem:
             self._prescribed_rows = rows
             self._constrained = np.union1d(self._bc_rows, rows)
         self._prescribed_values = np.asarray(values, dtype=float)
+
+    def linear_interior(self) -> np.ndarray:
+        """Local rows whose rows and columns of the Jacobian are the same for the whole run:
+        the free dofs of the linear bodies off every contact surface (sorted).  Serial with
+        a body that is not linear and a contact (where every body is linear the Jacobian
+        splits instead: :meth:`split`); empty otherwise."""
+        if self.comm.size > 1 or self.linear or not self.contacts:
+            return np.zeros(0, dtype=np.int64)
+        if self._interior is None or self._interior[0] is not self._constrained:
+            rows = np.concatenate([np.arange(self.block_slice(k).start,
+                                             self.block_slice(k).stop)
+                                   for k, body in enumerate(self.bodies) if body.linear]
+                                  + [np.zeros(0, dtype=np.int64)])
+            held = np.concatenate([c.surface_dofs() for c in self.contacts]
+                                  + [self._constrained])
+            self._interior = (self._constrained, np.setdiff1d(rows, held))
+        return self._interior[1]
 
     @property
     def constrained_rows(self) -> np.ndarray:

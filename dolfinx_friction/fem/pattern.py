@@ -27,6 +27,13 @@ def ownership_ends(comm: MPI.Comm, n_owned: int) -> np.ndarray:
     return np.cumsum(comm.allgather(n_owned)).astype(np.int64)
 
 
+def csr_values(A: PETSc.Mat) -> np.ndarray:
+    """The CSR values of a serial matrix: the array PETSc stores them in where
+    :meth:`CooPattern.create_matrix` made it (no copy; not to be written), else a copy."""
+    values = A.getAttr(_VALUES)
+    return A.getValuesCSR()[2] if values is None else values
+
+
 class _Block:
     """One group of COO entries: how its values travel to their rows' owners."""
 

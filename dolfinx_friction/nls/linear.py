@@ -38,6 +38,15 @@ factorisation it keeps: once that preconditioned a solve); ``K`` is factorised o
 ``G``'s columns, at that path's back-solve flops, could pay (on a 35k-dof 3D block they
 cannot: 0.67 s of factorisation was spent for nothing).
 Serial only: under MPI the path above.
+A factorisation given the constrained rows (Newton gives them: identity rows with zero
+right-hand side) solves on the free rows only (:mod:`~dolfinx_friction.nls.free_rows`):
+MUMPS would otherwise order the held dofs with their neighbours (the one-layer ironing
+holds u_z on every node: a quarter of the flops, half the time).  Where a nonlinear body
+meets linear ones (serial), the linear bodies' interior is condensed out as well, its
+factorisation kept for the run (:mod:`~dolfinx_friction.nls.interior`).  A factorisation
+of a nonlinear body's Jacobian kept as GMRES's preconditioner (``reuse``) does not pay
+there: 10-18 GMRES iterations per Jacobian on the ironing, each a tenth of a fresh
+factorisation.
 An iterative solver (:data:`~dolfinx_friction.nls.defaults.ITERATIVE`: GMRES with
 algebraic multigrid, or any Krylov solver the options give without ``ksp_rtol``) stops at
 the relative residual Newton asks for each step (inexact Newton);
@@ -71,6 +80,8 @@ import numpy as np
 from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
+from dolfinx_friction.nls.free_rows import FreeRows
+from dolfinx_friction.nls.interior import Interior
 
 DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 #: GMRES's relative residual with a kept factorisation, unless the caller asks otherwise
@@ -123,6 +134,10 @@ class LinearSolver:
         self.failure = ""
         self._condensed: Optional[Condensed] = None
         self.condensed_solves = 0
+        #: a factorisation (any package) solves on the free rows where they are given
+        self._factorises = pc.getType() in ("lu", "cholesky")
+        self._free_rows = FreeRows()
+        self._interior: Optional[Interior] = None
 
     @staticmethod
     def _new_ksp(comm, prefix: str) -> PETSc.KSP:
@@ -159,11 +174,34 @@ class LinearSolver:
         self.condensed_solves += 1
         return True
 
-    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL
-              ) -> bool:
+    def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL,
+              constrained: Optional[np.ndarray] = None,
+              constant: Optional[np.ndarray] = None) -> bool:
         """Solve; returns False when the solver failed (:attr:`failure` says why).
         ``rtol``: the relative residual a Krylov solve stops at (GMRES on a kept
-        factorisation; a Krylov solver whose options do not fix ``ksp_rtol``)."""
+        factorisation; a Krylov solver whose options do not fix ``ksp_rtol``).
+        ``constrained``: owned local rows that are identity rows of ``J`` with zero
+        right-hand side (:attr:`BlockProblem.constrained_rows`); a factorisation then solves
+        on the other rows only (:class:`~dolfinx_friction.nls.free_rows.FreeRows`).
+        ``constant`` (serial, with ``constrained``): free rows whose rows and columns are
+        the same in every ``J`` of the run (:meth:`BlockProblem.linear_interior`), condensed
+        out with their factorisation kept (:class:`~dolfinx_friction.nls.interior.Interior`)
+        where that path is taken."""
+        if constrained is None or not self._factorises:
+            return self._solve(J, b, x, rtol)
+
+        def solve(A: PETSc.Mat, b_: PETSc.Vec, x_: PETSc.Vec) -> bool:
+            return self._solve(A, b_, x_, rtol)
+        if constant is not None and len(constant):
+            if self._interior is None:
+                self._interior = Interior(self.ksp.getOptionsPrefix())
+            ok = self._interior.solve(solve, J, b, x, constrained, constant)
+            if ok is not None:
+                return ok
+        return self._free_rows.solve(solve, J, b, x, constrained)
+
+    def _solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float) -> bool:
+        """One solve of the system as given (with a kept factorisation where it pays)."""
         keep = (self.reuse and self._pays and not self._paused
                 and J.getSize() == self._factored_size)
         self._paused = max(self._paused - 1, 0)

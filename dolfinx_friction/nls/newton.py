@@ -158,7 +158,9 @@ class Newton:
             if solved is None:  # no split, or it did not pay: the whole Jacobian
                 A = problem.jacobian(x, symmetric=solver.symmetric)
                 with problem.timers.measure("linear_solve"):
-                    solved = solver.solve(A, b, dx, forcing(norm, trace.residuals[0], target))
+                    solved = solver.solve(A, b, dx, forcing(norm, trace.residuals[0], target),
+                                          problem.constrained_rows,
+                                          problem.linear_interior())
             if not solved:
                 trace.backtracks.append(0)
                 trace.reason = self.linear.failure
