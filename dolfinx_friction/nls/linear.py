@@ -137,6 +137,7 @@ class LinearSolver:
         #: a factorisation (any package) solves on the free rows where they are given
         self._factorises = pc.getType() in ("lu", "cholesky")
         self._free_rows = FreeRows()
+        self._operator_sizes: Optional[tuple] = None  # of the matrix the KSP last had
         self._interior: Optional[Interior] = None
 
     @staticmethod
@@ -219,6 +220,9 @@ class LinearSolver:
             self.ksp.setTolerances(rtol=rtol, max_it=self.max_krylov)
         elif self._inexact:
             self.ksp.setTolerances(rtol=rtol)
+        if self._operator_sizes not in (None, J.getSizes()):
+            self.ksp.reset()  # the free rows changed in number: PETSc keeps no old sizes
+        self._operator_sizes = J.getSizes()
         self.ksp.setOperators(J, J)
         self.ksp.getPC().setReusePreconditioner(keep)
         self.ksp.solve(b, x)
@@ -243,6 +247,7 @@ class LinearSolver:
             prefix = self.ksp.getOptionsPrefix()
             self.ksp.destroy()
             self.ksp = self._new_ksp(b.getComm(), prefix)
+            self._operator_sizes = None
         elif reason > 0 and self.ksp.getType() == "preonly":
             r = b.duplicate()
             J.mult(x, r)
