@@ -84,8 +84,8 @@ def _parser() -> argparse.ArgumentParser:
                        help="values of one scene key (dotted path, as run --set); the list is "
                             "split at commas outside brackets, braces and quotes: "
                             "step.1.bc.0.u=[0,0,-1],[0,0,-2] is two values")
-    sweep.add_argument("-j", "--jobs", type=_at_least_one, default=1, metavar="N",
-                       help="points run at the same time (default 1)")
+    sweep.add_argument("-j", "--jobs", type=_at_least_one, default=None, metavar="N",
+                       help="points run at the same time (default: the number of cores)")
     sweep.add_argument("--out", type=Path, metavar="DIR",
                        help="sweep folder (default: <scene stem>_sweep next to the scene)")
     sweep.add_argument("--quiet", action="store_true", help="no line per finished point")

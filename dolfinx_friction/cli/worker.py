@@ -8,7 +8,8 @@ Protocol (JSON lines): each line on stdin is the argv of one command (``["run", 
 ``{"status": exit status, "stderr": what the command printed on stderr}``, exactly what
 a fresh ``dolfinx-friction`` process would have given (its own stdout is discarded).  The
 worker ends at the end of stdin, or after a command that was interrupted (exit 130 or
-143: the sweep is being stopped).  Nothing of a command stays for the next one but the
+143: the sweep is being stopped).  It imports what a run needs (:func:`warm`) before it
+reads its first line, while the sweep validates its points.  Nothing of a command stays for the next one but the
 caches (compiled forms and kernels, imported modules): each ``main()`` builds its scene,
 solvers and PETSc options afresh and removes them.
 """
@@ -49,7 +50,18 @@ def run_captured(argv: list[str]) -> tuple[int, str]:
         return status, err.read()
 
 
+def warm() -> None:
+    """Import what every run imports (mpi4py, dolfinx, the form compiler, PETSc, the
+    contact kernels), as a ``run`` would, MPI without the singleton daemon."""
+    from dolfinx_friction.cli import frontend, mpi  # noqa: F401  (the commands)
+    mpi.no_singleton_daemon()
+    import dolfinx_friction.scene.runner  # noqa: F401
+    from dolfinx_friction.contact import backend
+    backend.compiled()
+
+
 def main() -> int:
+    warm()
     protocol = sys.stdout
     for line in sys.stdin:
         status, stderr = run_captured(json.loads(line))
