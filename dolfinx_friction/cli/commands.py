@@ -65,7 +65,8 @@ def run(args: argparse.Namespace, interruption: Interruption) -> int:
     from dolfinx_friction.scene.runner import run as run_scene
     progress = Progress() if MPI.COMM_WORLD.rank == 0 and not args.quiet else None
     try:
-        result = run_scene(scene, out=args.out, progress=progress, control=interruption)
+        result = run_scene(scene, out=args.out, progress=progress, control=interruption,
+                           workspace=args.workspace)
     finally:
         interruption.end()
         if progress is not None:

@@ -21,6 +21,7 @@ from dolfinx_friction import __version__
 from dolfinx_friction.cli import commands, mpi, signals
 from dolfinx_friction.cli.exits import EXIT_INPUT, EXIT_INTERNAL, classify, error, signal_status
 from dolfinx_friction.errors import Interrupted
+from dolfinx_friction.scene.workspace import Workspace
 
 __all__ = ["main"]
 
@@ -170,9 +171,12 @@ def _show_notices(quiet: bool) -> None:
     logger.propagate = False
 
 
-def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Run the command line ``argv`` (default: ``sys.argv[1:]``); the exit status."""
+def main(argv: Optional[Sequence[str]] = None, workspace: Optional[Workspace] = None) -> int:
+    """Run the command line ``argv`` (default: ``sys.argv[1:]``); the exit status.
+    ``workspace``: what a ``run`` keeps for the next one in this process (a sweep's
+    worker, :mod:`~dolfinx_friction.cli.worker`)."""
     args = _parser().parse_args(argv)
+    args.workspace = workspace
     _quiet_libraries(args.debug)
     _show_notices(getattr(args, "quiet", False))
     mpi.no_singleton_daemon()

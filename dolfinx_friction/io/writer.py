@@ -343,9 +343,14 @@ class FieldWriter:
         _silence_hdf5()
         self._size = 0  # bytes of the last increment's field folder and time series
         self._series: dict[str, list[str]] = {f.body.name: [] for f in problem.fields}
-        self.outputs = [output_spaces(f) for f in problem.fields]
-        # compiled once: a form compiler cache hit still costs ~10 ms per expression
-        self.stresses = [self._stresses(f) for f in problem.fields]
+        # compiled once (and kept in the problem's workspace for later runs): a form
+        # compiler cache hit still costs ~10 ms per expression
+        self.outputs = [problem.shared(("output spaces", id(f.V)),
+                                       lambda f=f: (f.V, output_spaces(f)))[1]
+                        for f in problem.fields]
+        self.stresses = [problem.shared(("stresses", id(f.u), f.body),
+                                        lambda f=f: (f.u, self._stresses(f)))[1]
+                         for f in problem.fields]
 
     def _stresses(self, field) -> list:
         """Cell functions and the expressions that fill them: the Cauchy stress
