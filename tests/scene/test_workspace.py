@@ -28,8 +28,8 @@ def _text(path: Path, drop_wall: bool = False) -> list[str]:
 
 def test_runs_sharing_a_workspace_equal_fresh_runs(shared_dir, comm):
     scene = shared_dir / "scene.toml"
+    meshes.two_boxes(shared_dir / "two.msh", n_block=(2, 2, 1), n_foundation=(3, 3, 1))
     if comm.rank == 0:
-        meshes.two_boxes(shared_dir / "two.msh", n_block=(2, 2, 1), n_foundation=(3, 3, 1))
         scene.write_text(toml_dumps(edited(GOOD, [("output.fields", True)])))
     comm.barrier()
     workspace, last = Workspace(), None
