@@ -13,8 +13,8 @@ kernels at once, while this process validates every point with the scene reader,
 :func:`validate`), then every point is run as ``run SCENE --out DIR/<point> --quiet --set
 ...`` in a worker (:mod:`~dolfinx_friction.cli.worker`: in-process, point after point,
 with the exit status and stderr a fresh process would give), up to ``jobs`` at a time; the
-first point runs alone, so that dolfinx compiles the forms once for all (its JIT cache),
-not in several processes at once.  ``DIR/sweep.csv`` is rewritten (atomically) each time a
+first point runs alone until it has written its first increment, so that dolfinx compiles
+the forms once for all (its JIT cache), not in several processes at once.  ``DIR/sweep.csv`` is rewritten (atomically) each time a
 point ends: one row per ended point, failed points too, with the last line its run printed
 on stderr.
 """
@@ -330,7 +330,7 @@ def run_sweep(scene: Path, points: Sequence[Point], directory: Path, pool: Worke
               on_result: Callable[[PointResult, dict], None] = lambda result, row: None
               ) -> list[PointResult]:
     """Run every point on the pool's workers, as many at a time as it has (the first one
-    alone), rewriting ``directory/sweep.csv`` as each ends and calling ``on_result(result,
+    alone until its first increment is written: its forms are compiled), rewriting ``directory/sweep.csv`` as each ends and calling ``on_result(result,
     row)`` (its sweep.csv row); returns the results in point order.
 
     On an exception in the waiting thread (KeyboardInterrupt, or the signal handler's
@@ -356,10 +356,12 @@ def run_sweep(scene: Path, points: Sequence[Point], directory: Path, pool: Worke
     futures: list[Future] = []
     with ThreadPoolExecutor(max_workers=pool.size) as threads:
         try:
+            first = directory / points[0].folder / "history.csv"
+            since = time.time_ns()
             futures.append(threads.submit(run, points[0]))
-            _wait_all(futures, ended)
+            _wait_all(futures, ended, lambda: _has_increment(first, since))
             futures += [threads.submit(run, point) for point in points[1:]]
-            _wait_all(futures[1:], ended)
+            _wait_all(futures, ended)
         except BaseException:
             pool.stop()
             threads.shutdown(wait=True, cancel_futures=True)
@@ -370,14 +372,27 @@ def run_sweep(scene: Path, points: Sequence[Point], directory: Path, pool: Worke
     return [results[k] for k in sorted(results)]
 
 
-def _wait_all(futures: list[Future], ended: Callable) -> None:
+def _wait_all(futures: list[Future], ended: Callable,
+              until: Callable[[], bool] = lambda: False) -> None:
     """Wait for the futures, handing each result to ``ended`` as it comes (in short waits:
-    the main thread stays responsive to Ctrl-C)."""
-    pending = set(futures)
-    while pending:
-        done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
+    the main thread stays responsive to Ctrl-C), or until ``until()`` (polled)."""
+    pending = {future for future in futures if not future.done()}
+    for future in futures:
+        if future.done():
+            ended(future.result())
+    while pending and not until():
+        done, pending = wait(pending, timeout=0.05, return_when=FIRST_COMPLETED)
         for future in sorted(done, key=futures.index):
             ended(future.result())
+
+
+def _has_increment(history: Path, since: int) -> bool:
+    """Whether a point's ``history.csv``, written since ``since`` (``time_ns``), has a row:
+    its run set up (forms compiled) and converged its first increment."""
+    try:
+        return history.stat().st_mtime_ns >= since and history.read_bytes().count(b"\n") > 1
+    except OSError:
+        return False
 
 
 # ------------------------------------------------------------------------ sweep.csv

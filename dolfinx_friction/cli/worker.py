@@ -58,12 +58,13 @@ def run_captured(argv: list[str], workspace: Optional[Workspace] = None) -> tupl
 
 def warm() -> None:
     """Import what every run imports (mpi4py, dolfinx, the form compiler, PETSc, the
-    contact kernels), as a ``run`` would, MPI without the singleton daemon."""
+    contact kernels), as a ``run`` would, MPI without the singleton daemon; initialise
+    numba (:func:`~dolfinx_friction.contact.backend.warm`)."""
     from dolfinx_friction.cli import frontend, mpi  # noqa: F401  (the commands)
     mpi.no_singleton_daemon()
     import dolfinx_friction.scene.runner  # noqa: F401
     from dolfinx_friction.contact import backend
-    backend.compiled()
+    backend.warm()
 
 
 def main() -> int:
