@@ -226,10 +226,12 @@ class _Worker:
         self.proc = subprocess.Popen([sys.executable, "-m", "dolfinx_friction.cli.worker"],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                      stderr=subprocess.DEVNULL, text=True, env=env)
+        self.used = False  # whether it was given a point
 
     def run(self, argv: list[str]) -> tuple[int, str]:
         """One point's exit status and stderr; a worker that died gives its own status
         (negative: the signal that killed it)."""
+        self.used = True
         try:
             self.proc.stdin.write(json.dumps(argv) + "\n")
             self.proc.stdin.flush()
@@ -264,8 +266,9 @@ class _Worker:
 class WorkerPool:
     """``size`` warm workers, started at once (they import while the caller goes on), that
     run the points of one sweep and can all be stopped (the running points terminated, no
-    more started).  A context manager: on leaving, every worker ends (killed when the block
-    raised before any point ran: nothing of a sweep is half-done then)."""
+    more started).  A context manager: on leaving, every worker ends; one that was given
+    no point is killed (it has nothing to finish), all are when the block raised before
+    any point ran (a bad point: the sweep answers at once)."""
 
     def __init__(self, size: int):
         self.size, self.env = size, _environment()
@@ -317,11 +320,12 @@ class WorkerPool:
                 worker.proc.terminate()
 
     def close(self, kill: bool = False) -> None:
-        """End every worker, all at once (or kill them); wait for them."""
+        """End every worker, all at once (kill them, or those given no point); wait for
+        them."""
         with self.lock:
             workers, self.idle = self.idle + list(self.busy), []
         for worker in workers:
-            worker.proc.kill() if kill else worker.end()
+            worker.proc.kill() if kill or not worker.used else worker.end()
         for worker in workers:
             worker.wait(10.0)
 
