@@ -7,7 +7,7 @@ single ``run``, before and after a change.
 
 The scene is ``bench_small.py``'s ``boxes`` (801 dofs, 1 + 10 increments, all outputs).
 Each package tree (this one; with ``--before``, the commit exported by ``git archive``
-into ``$BENCH_WORK/startup``) is measured in fresh processes, one thread each, the
+into ``$BENCH_WORK/trees``) is measured in fresh processes, one thread each, the
 minimum CPU time (user + system, ``RUSAGE_CHILDREN``) over the repeats:
 
 * ``interpreter``: ``python -c pass``;
@@ -69,17 +69,6 @@ print(json.dumps(out))
 """
 
 
-def export(commit: str) -> str:
-    """The package at ``commit`` in the work directory (``git archive``); its root."""
-    root = B.work_dir("startup") / commit
-    if not (root / "dolfinx_friction").is_dir():
-        root.mkdir(parents=True, exist_ok=True)
-        archive = subprocess.run(["git", "archive", commit, "dolfinx_friction"], cwd=B.ROOT,
-                                 check=True, capture_output=True).stdout
-        subprocess.run(["tar", "-x", "-C", str(root)], input=archive, check=True)
-    return str(root)
-
-
 def cpu_of(cmd: list[str], env: dict, cwd, repeats: int) -> float:
     """The least CPU time of ``cmd`` over ``repeats`` runs."""
     best = float("inf")
@@ -131,7 +120,7 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     toml = S.prepare("boxes")
     machine = B.machine()
-    trees = ([(args.before, export(args.before))] if args.before else []) + \
+    trees = ([(args.before, str(B.export(args.before)))] if args.before else []) + \
         [(machine["commit"] or "this tree", str(B.ROOT))]
     columns = {name: measure(root, toml, args.repeats) for name, root in trees}
     load1 = B.load_average()

@@ -14,9 +14,9 @@ kernels at once, while this process validates every point with the scene reader,
 ...`` in a worker (:mod:`~dolfinx_friction.cli.worker`: in-process, point after point,
 with the exit status and stderr a fresh process would give), up to ``jobs`` at a time; the
 first point runs alone until it has written its first increment, so that dolfinx compiles
-the forms once for all (its JIT cache), not in several processes at once.  ``DIR/sweep.csv`` is rewritten (atomically) each time a
-point ends: one row per ended point, failed points too, with the last line its run printed
-on stderr.
+the forms once for all (its JIT cache), not in several processes at once.
+``DIR/sweep.csv`` is rewritten (atomically) each time a point ends: one row per ended
+point, failed points too, with the last line its run printed on stderr.
 """
 from __future__ import annotations
 
@@ -334,8 +334,9 @@ def run_sweep(scene: Path, points: Sequence[Point], directory: Path, pool: Worke
               on_result: Callable[[PointResult, dict], None] = lambda result, row: None
               ) -> list[PointResult]:
     """Run every point on the pool's workers, as many at a time as it has (the first one
-    alone until its first increment is written: its forms are compiled), rewriting ``directory/sweep.csv`` as each ends and calling ``on_result(result,
-    row)`` (its sweep.csv row); returns the results in point order.
+    alone until its first increment is written: its forms are compiled), rewriting
+    ``directory/sweep.csv`` as each ends and calling ``on_result(result, row)`` (its
+    sweep.csv row); returns the results in point order.
 
     On an exception in the waiting thread (KeyboardInterrupt, or the signal handler's
     exception) the running points are terminated and waited for, sweep.csv lists every

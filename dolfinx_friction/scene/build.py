@@ -189,8 +189,12 @@ class DiscreteScene:
         #: what this problem takes from and leaves to later runs (None: nothing shared)
         self.workspace = workspace if meshes is None else None
         names = [b.name for b in scene.bodies]
-        mesh_key = ("meshes", file_key(scene.mesh), tuple(names), comm.py2f()) \
-            if self.workspace is not None else None
+        mesh_key = None
+        if self.workspace is not None:
+            try:
+                mesh_key = ("meshes", file_key(scene.mesh), tuple(names), comm.py2f())
+            except (OSError, TypeError):  # (no such file: the loader says so)
+                pass
         self.meshes = meshes or self.shared(
             mesh_key, lambda: gmsh_io.load_mesh(scene.mesh, names, comm))
         self.gdim = self.meshes.gdim
