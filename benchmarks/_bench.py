@@ -70,6 +70,7 @@ def export(commit: str) -> Path:
     directory: the root to put on ``PYTHONPATH`` for a before/after comparison."""
     root = work_dir("trees") / commit
     if not (root / "dolfinx_friction").is_dir():
+        root.mkdir(exist_ok=True)
         archive = subprocess.run(["git", "archive", commit, "dolfinx_friction"], cwd=ROOT,
                                  check=True, capture_output=True).stdout
         subprocess.run(["tar", "-x", "-C", str(root)], input=archive, check=True)
