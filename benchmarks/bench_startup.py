@@ -109,6 +109,10 @@ def measure(root: str, toml, repeats: int) -> dict[str, float]:
                                     "--out", "startup_cli"], env, d, repeats)
     rows["rest"] = rows["whole command"] - sum(
         v for k, v in rows.items() if k != "whole command")
+    floor = ["interpreter", *(name for name, _ in IMPORTS), "numba start (typing, target contexts)"]
+    rows["sum: the floor (interpreter, imports, numba start)"] = sum(rows[k] for k in floor)
+    rows["sum: the run (first-call costs and run: rows)"] = sum(
+        v for k, v in rows.items() if k.startswith(("run:", "first-call")))
     return rows
 
 
