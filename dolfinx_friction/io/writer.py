@@ -351,6 +351,7 @@ class FieldWriter:
         self.stresses = [problem.shared(("stresses", id(f.u), f.body),
                                         lambda f=f: (f.u, self._stresses(f)))[1]
                          for f in problem.fields]
+        self._functions: list[dict] = [{} for _ in problem.fields]  # output Functions by name
 
     def _stresses(self, field) -> list:
         """Cell functions and the expressions that fill them: the Cauchy stress
@@ -375,13 +376,14 @@ class FieldWriter:
                 error = _fault(self.dir / name, exc)
         _collective(comm, error)
         self.problem.system.scatter()
-        for field, spaces, stresses in zip(self.problem.fields, self.outputs, self.stresses):
+        for field, spaces, stresses, kept in zip(self.problem.fields, self.outputs,
+                                                 self.stresses, self._functions):
             path = scratch / f"{field.body.name}.xdmf"
             for f, expression in stresses:
                 f.interpolate(expression)
             try:  # HDF5 writes collectively: every rank sees the failure
                 write_fields(path, field, spaces, self.problem.contact_fields(field), inc.t,
-                             [f for f, _ in stresses])
+                             [f for f, _ in stresses], kept)
             except (RuntimeError, OSError) as exc:
                 error = _fault(self.dir / name / path.name, exc)
             if comm.allreduce(error is not None):  # (any rank: the others must stop too)
