@@ -1,6 +1,8 @@
 """Runs that share a :class:`~dolfinx_friction.scene.workspace.Workspace` (the points of a
 sweep in one warm worker) reuse the meshes, spaces and compiled forms where the scene
-agrees, and give a fresh run's results and files bit for bit.  Serial and on 2 ranks."""
+agrees, and give a fresh run's results and files bit for bit.  Serial and on 2 ranks (there
+to round-off: PETSc sums the entries other ranks send in the order they arrive, so two
+fresh runs on several ranks may differ in the last bits)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -36,10 +38,15 @@ def test_runs_sharing_a_workspace_equal_fresh_runs(shared_dir, comm):
     for k, sets in enumerate(POINTS):
         ours = run(scene, shared_dir / f"ours{k}", sets, comm=comm, workspace=workspace)
         fresh = run(scene, shared_dir / f"fresh{k}", sets, comm=comm)
+        scale = max(np.abs(r).max() for inc in fresh.increments for r in inc.reactions.values())
         for a, b in zip(ours.increments, fresh.increments, strict=True):
             assert a.iterations == b.iterations
             for group in a.reactions:
-                assert np.array_equal(a.reactions[group], b.reactions[group]), (sets, group)
+                if comm.size == 1:
+                    assert np.array_equal(a.reactions[group], b.reactions[group]), (sets, group)
+                else:
+                    assert np.allclose(a.reactions[group], b.reactions[group], rtol=0,
+                                       atol=1e-12 * scale), (sets, group)
         if last is not None:  # the same mesh and spaces, the foundation's compiled forms
             assert ours.problem.meshes is last.problem.meshes
             assert ours.problem.fields[1].u is last.problem.fields[1].u
@@ -48,7 +55,7 @@ def test_runs_sharing_a_workspace_equal_fresh_runs(shared_dir, comm):
             assert (ours.problem.system.bodies[0] is last.problem.system.bodies[0]) \
                 == same_block
         last = ours
-        if comm.rank == 0:
+        if comm.size == 1:
             a, b = ours.directory, fresh.directory
             assert _text(a / "history.csv", True) == _text(b / "history.csv", True)
             for name in ("contact.csv", "fields/block.xdmf", "fields/foundation.xdmf",
