@@ -65,6 +65,18 @@ def work_dir(name: str) -> Path:
 
 
 # ----------------------------------------------------------------------------- machine
+def export(commit: str) -> Path:
+    """The package as it was at ``commit``, exported (``git archive``) into the work
+    directory: the root to put on ``PYTHONPATH`` for a before/after comparison."""
+    root = work_dir("trees") / commit
+    if not (root / "dolfinx_friction").is_dir():
+        root.mkdir(exist_ok=True)
+        archive = subprocess.run(["git", "archive", commit, "dolfinx_friction"], cwd=ROOT,
+                                 check=True, capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(root)], input=archive, check=True)
+    return root
+
+
 def load_average() -> float:
     return os.getloadavg()[0]
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import os
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from dolfinx_friction.cli import mpi
 from dolfinx_friction.cli.exits import EXIT_DIVERGED, EXIT_INPUT, EXIT_OK, error, signal_status
@@ -21,6 +21,9 @@ from dolfinx_friction.errors import Interrupted, OutputError
 from dolfinx_friction.io.files import file_fault
 from dolfinx_friction.scene.toml import SceneError, default_output_dir, load_scene
 from dolfinx_friction.scene.validation import check_mesh_file
+
+if TYPE_CHECKING:
+    from dolfinx_friction.cli.sweep import Point, WorkerPool
 
 __all__ = ["COMMANDS", "UsageError"]
 
@@ -62,7 +65,8 @@ def run(args: argparse.Namespace, interruption: Interruption) -> int:
     from dolfinx_friction.scene.runner import run as run_scene
     progress = Progress() if MPI.COMM_WORLD.rank == 0 and not args.quiet else None
     try:
-        result = run_scene(scene, out=args.out, progress=progress, control=interruption)
+        result = run_scene(scene, out=args.out, progress=progress, control=interruption,
+                           workspace=args.workspace)
     finally:
         interruption.end()
         if progress is not None:
@@ -97,12 +101,22 @@ def _one_process(args: argparse.Namespace) -> None:
 
 def sweep(args: argparse.Namespace, interruption: Interruption) -> int:
     _one_process(args)
-    from dolfinx_friction.cli.sweep import SWEEP_CSV, default_sweep_dir, plan, run_sweep
+    from dolfinx_friction.cli.sweep import (WorkerPool, default_jobs, default_sweep_dir,
+                                            expand, validate)
     _scene_file(args.scene)
-    points = plan(args.scene, args.sweeps)
+    points = expand(args.sweeps)
     directory = args.out if args.out is not None else default_sweep_dir(args.scene)
     if directory.exists() and not directory.is_dir():
         raise UsageError(f"sweep folder {directory}: not a folder")
+    with WorkerPool(min(args.jobs or default_jobs(), len(points))) as pool:
+        validate(args.scene, points)  # (while the workers import)
+        return _sweep(args, points, directory, pool)
+
+
+def _sweep(args: argparse.Namespace, points: list[Point], directory: Path,
+           pool: WorkerPool) -> int:
+    """The validated points of ``sweep`` run on the pool, one line per point ended."""
+    from dolfinx_friction.cli.sweep import SWEEP_CSV, run_sweep
     table = directory / SWEEP_CSV
     ended: list = []
 
@@ -117,7 +131,7 @@ def sweep(args: argparse.Namespace, interruption: Interruption) -> int:
               f"({result.wall:.1f} s)", flush=True)
 
     try:
-        results = run_sweep(args.scene, points, directory, args.jobs, report)
+        results = run_sweep(args.scene, points, directory, pool, report)
     except Interrupted as exc:  # (the running points are stopped and listed)
         error(f"sweep interrupted: {len(ended)} of {len(points)} points ended"
                + (f", listed in {table}" if ended else ""))

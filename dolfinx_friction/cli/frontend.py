@@ -21,6 +21,7 @@ from dolfinx_friction import __version__
 from dolfinx_friction.cli import commands, mpi, signals
 from dolfinx_friction.cli.exits import EXIT_INPUT, EXIT_INTERNAL, classify, error, signal_status
 from dolfinx_friction.errors import Interrupted
+from dolfinx_friction.scene.workspace import Workspace
 
 __all__ = ["main"]
 
@@ -84,8 +85,8 @@ def _parser() -> argparse.ArgumentParser:
                        help="values of one scene key (dotted path, as run --set); the list is "
                             "split at commas outside brackets, braces and quotes: "
                             "step.1.bc.0.u=[0,0,-1],[0,0,-2] is two values")
-    sweep.add_argument("-j", "--jobs", type=_at_least_one, default=1, metavar="N",
-                       help="points run at the same time (default 1)")
+    sweep.add_argument("-j", "--jobs", type=_at_least_one, default=None, metavar="N",
+                       help="points run at the same time (default: the number of cores)")
     sweep.add_argument("--out", type=Path, metavar="DIR",
                        help="sweep folder (default: <scene stem>_sweep next to the scene)")
     sweep.add_argument("--quiet", action="store_true", help="no line per finished point")
@@ -170,9 +171,12 @@ def _show_notices(quiet: bool) -> None:
     logger.propagate = False
 
 
-def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Run the command line ``argv`` (default: ``sys.argv[1:]``); the exit status."""
+def main(argv: Optional[Sequence[str]] = None, workspace: Optional[Workspace] = None) -> int:
+    """Run the command line ``argv`` (default: ``sys.argv[1:]``); the exit status.
+    ``workspace``: what a ``run`` keeps for the next one in this process (a sweep's
+    worker, :mod:`~dolfinx_friction.cli.worker`)."""
     args = _parser().parse_args(argv)
+    args.workspace = workspace
     _quiet_libraries(args.debug)
     _show_notices(getattr(args, "quiet", False))
     mpi.no_singleton_daemon()

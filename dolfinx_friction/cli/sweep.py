@@ -7,15 +7,16 @@ outside brackets, braces and quotes, so ``u=[0,0,-1],[0,0,-2]`` is two vectors a
 ``name="a,b"`` one string; each value is read as ``run --set`` reads it (TOML, else a bare
 string).
 
-Every point is validated with the scene reader before anything runs, then run as
-``run SCENE --out DIR/<point> --quiet --set ...`` in a warm worker process
-(:mod:`~dolfinx_friction.cli.worker`: one per job, each importing the package and dolfinx
-and compiling the forms once, then running point after point in-process, with the exit
-status and stderr a fresh process would give), up to ``jobs`` at a time; the first point
-runs alone, so that dolfinx compiles the forms once for all (its JIT cache), not in
-several processes at once.  ``DIR/sweep.csv`` is
-rewritten (atomically) each time a point ends: one row per ended point, failed points too,
-with the last line its run printed on stderr.
+The points are listed (:func:`expand`), the warm worker processes started
+(:class:`WorkerPool`: one per job, each importing the package, dolfinx and the contact
+kernels at once, while this process validates every point with the scene reader,
+:func:`validate`), then every point is run as ``run SCENE --out DIR/<point> --quiet --set
+...`` in a worker (:mod:`~dolfinx_friction.cli.worker`: in-process, point after point,
+with the exit status and stderr a fresh process would give), up to ``jobs`` at a time; the
+first point runs alone until it has written its first increment, so that dolfinx compiles
+the forms once for all (its JIT cache), not in several processes at once.
+``DIR/sweep.csv`` is rewritten (atomically) each time a point ends: one row per ended
+point, failed points too, with the last line its run printed on stderr.
 """
 from __future__ import annotations
 
@@ -41,8 +42,8 @@ from dolfinx_friction.io.reader import ResultsError, read_run
 from dolfinx_friction.scene.toml import load_scene
 from dolfinx_friction.scene.validation import check_mesh_file
 
-__all__ = ["SweepError", "Point", "PointResult", "split_values", "plan", "run_sweep",
-           "SWEEP_CSV", "default_sweep_dir"]
+__all__ = ["SweepError", "Point", "PointResult", "WorkerPool", "split_values", "expand",
+           "validate", "run_sweep", "default_jobs", "SWEEP_CSV", "default_sweep_dir"]
 
 SWEEP_CSV = "sweep.csv"
 #: Columns of sweep.csv before the swept keys, and between the keys and the forces.
@@ -145,10 +146,9 @@ def _folder_names(labels: list[str]) -> list[str]:
     return names
 
 
-def plan(scene: Path, options: Sequence[str]) -> list[Point]:
-    """The points of a sweep, every one validated by the scene reader (and the mesh file
-    checked) before anything runs.  Raises :class:`SweepError` or ``SceneError`` (one line
-    naming the key)."""
+def expand(options: Sequence[str]) -> list[Point]:
+    """The points of a sweep from its ``--set KEY=V1,V2,...`` options, not yet validated.
+    Raises :class:`SweepError` (one line naming the option)."""
     if not options:
         raise SweepError("sweep: give at least one --set KEY=V1,V2,...")
     axes = [_axis(option) for option in options]
@@ -158,15 +158,27 @@ def plan(scene: Path, options: Sequence[str]) -> list[Point]:
         raise SweepError(f"--set {twice}: the key is given twice")
     combos = [tuple(zip(keys, values)) for values in itertools.product(*(v for _, v in axes))]
     labels = [",".join(_assignments(combo)) for combo in combos]
-    points = [Point(n, combo, name) for n, (combo, name)
-              in enumerate(zip(combos, _folder_names(labels)), 1)]
+    return [Point(n, combo, name) for n, (combo, name)
+            in enumerate(zip(combos, _folder_names(labels)), 1)]
+
+
+def validate(scene: Path, points: Sequence[Point]) -> None:
+    """Every point read by the scene reader (and each mesh file checked) before anything
+    runs.  Raises ``SceneError`` (one line naming the key)."""
     checked: set[Path] = set()
     for point in points:
         loaded = load_scene(scene, point.overrides)
         if Path(loaded.mesh) not in checked:
             checked.add(Path(loaded.mesh))
             check_mesh_file(loaded, scene)
-    return points
+
+
+def default_jobs() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # (not Linux)
+        return os.cpu_count() or 1
 
 
 def default_sweep_dir(scene: Path) -> Path:
@@ -207,16 +219,19 @@ _INTERRUPTED = {-signal.SIGINT, -signal.SIGTERM, 128 + signal.SIGINT, 128 + sign
 
 class _Worker:
     """A warm process running points one after another (:mod:`~dolfinx_friction.cli.worker`):
-    the imports and the compiled forms are paid once per worker, not once per point."""
+    the imports and the compiled forms are paid once per worker, not once per point.  It
+    starts importing as soon as it is made."""
 
     def __init__(self, env: dict[str, str]):
         self.proc = subprocess.Popen([sys.executable, "-m", "dolfinx_friction.cli.worker"],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                      stderr=subprocess.DEVNULL, text=True, env=env)
+        self.used = False  # whether it was given a point
 
     def run(self, argv: list[str]) -> tuple[int, str]:
         """One point's exit status and stderr; a worker that died gives its own status
         (negative: the signal that killed it)."""
+        self.used = True
         try:
             self.proc.stdin.write(json.dumps(argv) + "\n")
             self.proc.stdin.flush()
@@ -232,39 +247,58 @@ class _Worker:
     def alive(self) -> bool:
         return self.proc.poll() is None
 
-    def close(self) -> None:
-        """End the worker (at the end of its input; killed if it does not end in 10 s)."""
+    def end(self) -> None:
+        """Tell the worker to end (the end of its input); :meth:`wait` for it."""
         try:
             self.proc.stdin.close()
-            self.proc.wait(timeout=10)
-        except (OSError, subprocess.TimeoutExpired):
+        except OSError:
+            pass
+
+    def wait(self, timeout: float) -> None:
+        """Wait for the end of the worker (killed if it has not ended within ``timeout``)."""
+        try:
+            self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait()
 
 
-class _Runner:
-    """Runs the points on warm workers (one per job, started as needed) and can stop them
-    all (terminate the running points, start no more)."""
+class WorkerPool:
+    """``size`` warm workers, started at once (they import while the caller goes on), that
+    run the points of one sweep and can all be stopped (the running points terminated, no
+    more started).  A context manager: on leaving, every worker ends; one that was given
+    no point is killed (it has nothing to finish), all are when the block raised before
+    any point ran (a bad point: the sweep answers at once)."""
 
-    def __init__(self, scene: Path, directory: Path):
-        self.scene, self.directory, self.env = scene, directory, _environment()
-        self.stopped = False
-        self.idle: list[_Worker] = []
+    def __init__(self, size: int):
+        self.size, self.env = size, _environment()
+        self.stopped, self.started = False, False
+        self.idle = [_Worker(self.env) for _ in range(size)]
         self.busy: set[_Worker] = set()
         self.lock = threading.Lock()
 
-    def __call__(self, point: Point) -> Optional[PointResult]:
+    def __enter__(self) -> "WorkerPool":
+        return self
+
+    def __exit__(self, kind, exc, tb) -> None:
+        self.close(kill=exc is not None and not self.started)
+
+    def run(self, scene: Path, directory: Path, point: Point) -> Optional[PointResult]:
+        """Run one point on an idle worker (a new one should one have died); None when the
+        pool was stopped before it began."""
         start = time.perf_counter()
         with self.lock:
             if self.stopped:
                 return None
+            self.started = True
             worker = self.idle.pop() if self.idle else _Worker(self.env)
             self.busy.add(worker)
-        status, stderr = worker.run(_argv(self.scene, point, self.directory))
+        status, stderr = worker.run(_argv(scene, point, directory))
         with self.lock:
             self.busy.discard(worker)
             if self.stopped or not worker.alive:
-                worker.close()
+                worker.end()
+                worker.wait(10.0)
             else:
                 self.idle.append(worker)
         lines = [line.strip() for line in stderr.splitlines() if line.strip()]
@@ -279,23 +313,28 @@ class _Runner:
         return PointResult(point, status, reason, time.perf_counter() - start)
 
     def stop(self) -> None:
+        """Terminate the running points (each stops after its current increment, 143)."""
         with self.lock:
             self.stopped = True
             for worker in self.busy:
-                worker.proc.terminate()  # the point stops after its current increment (143)
+                worker.proc.terminate()
 
-    def close(self) -> None:
-        """End every worker."""
+    def close(self, kill: bool = False) -> None:
+        """End every worker, all at once (kill them, or those given no point); wait for
+        them."""
         with self.lock:
             workers, self.idle = self.idle + list(self.busy), []
         for worker in workers:
-            worker.close()
+            worker.proc.kill() if kill or not worker.used else worker.end()
+        for worker in workers:
+            worker.wait(10.0)
 
 
-def run_sweep(scene: Path, points: Sequence[Point], directory: Path, jobs: int,
+def run_sweep(scene: Path, points: Sequence[Point], directory: Path, pool: WorkerPool,
               on_result: Callable[[PointResult, dict], None] = lambda result, row: None
               ) -> list[PointResult]:
-    """Run every point, up to ``jobs`` at a time (the first one alone), rewriting
+    """Run every point on the pool's workers, as many at a time as it has (the first one
+    alone until its first increment is written: its forms are compiled), rewriting
     ``directory/sweep.csv`` as each ends and calling ``on_result(result, row)`` (its
     sweep.csv row); returns the results in point order.
 
@@ -304,7 +343,6 @@ def run_sweep(scene: Path, points: Sequence[Point], directory: Path, jobs: int,
     point that ended, and the exception goes on.
     """
     directory.mkdir(parents=True, exist_ok=True)
-    runner = _Runner(scene, directory)
     keys = [key for key, _ in points[0].values] if points else []
     rows: dict[int, dict[str, str]] = {}
     results: dict[int, PointResult] = {}
@@ -317,34 +355,49 @@ def run_sweep(scene: Path, points: Sequence[Point], directory: Path, jobs: int,
         write_table(directory / SWEEP_CSV, keys, [rows[k] for k in sorted(rows)])
         on_result(result, rows[result.point.index])
 
+    def run(point: Point) -> Optional[PointResult]:
+        return pool.run(scene, directory, point)
+
     futures: list[Future] = []
-    try:
-        with ThreadPoolExecutor(max_workers=jobs) as pool:
-            try:
-                futures.append(pool.submit(runner, points[0]))
-                _wait_all(futures, ended)
-                futures += [pool.submit(runner, point) for point in points[1:]]
-                _wait_all(futures[1:], ended)
-            except BaseException:
-                runner.stop()
-                pool.shutdown(wait=True, cancel_futures=True)
-                for future in futures:  # the points stopped now are rows too
-                    if future.done() and not future.cancelled() and future.exception() is None:
-                        ended(future.result())
-                raise
-    finally:
-        runner.close()
+    with ThreadPoolExecutor(max_workers=pool.size) as threads:
+        try:
+            first = directory / points[0].folder / "history.csv"
+            since = time.time_ns()
+            futures.append(threads.submit(run, points[0]))
+            _wait_all(futures, ended, lambda: _has_increment(first, since))
+            futures += [threads.submit(run, point) for point in points[1:]]
+            _wait_all(futures, ended)
+        except BaseException:
+            pool.stop()
+            threads.shutdown(wait=True, cancel_futures=True)
+            for future in futures:  # the points stopped now are rows too
+                if future.done() and not future.cancelled() and future.exception() is None:
+                    ended(future.result())
+            raise
     return [results[k] for k in sorted(results)]
 
 
-def _wait_all(futures: list[Future], ended: Callable) -> None:
+def _wait_all(futures: list[Future], ended: Callable,
+              until: Callable[[], bool] = lambda: False) -> None:
     """Wait for the futures, handing each result to ``ended`` as it comes (in short waits:
-    the main thread stays responsive to Ctrl-C)."""
-    pending = set(futures)
-    while pending:
-        done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
+    the main thread stays responsive to Ctrl-C), or until ``until()`` (polled)."""
+    pending = {future for future in futures if not future.done()}
+    for future in futures:
+        if future.done():
+            ended(future.result())
+    while pending and not until():
+        done, pending = wait(pending, timeout=0.05, return_when=FIRST_COMPLETED)
         for future in sorted(done, key=futures.index):
             ended(future.result())
+
+
+def _has_increment(history: Path, since: int) -> bool:
+    """Whether a point's ``history.csv``, written since ``since`` (``time_ns``), has a row:
+    its run set up (forms compiled) and converged its first increment."""
+    try:
+        return history.stat().st_mtime_ns >= since and history.read_bytes().count(b"\n") > 1
+    except OSError:
+        return False
 
 
 # ------------------------------------------------------------------------ sweep.csv

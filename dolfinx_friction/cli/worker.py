@@ -8,9 +8,13 @@ Protocol (JSON lines): each line on stdin is the argv of one command (``["run", 
 ``{"status": exit status, "stderr": what the command printed on stderr}``, exactly what
 a fresh ``dolfinx-friction`` process would have given (its own stdout is discarded).  The
 worker ends at the end of stdin, or after a command that was interrupted (exit 130 or
-143: the sweep is being stopped).  Nothing of a command stays for the next one but the
-caches (compiled forms and kernels, imported modules): each ``main()`` builds its scene,
-solvers and PETSc options afresh and removes them.
+143: the sweep is being stopped).  It imports what a run needs (:func:`warm`) before it
+reads its first line, while the sweep validates its points.  Nothing of a command stays
+for the next one but the caches (imported modules, compiled kernels) and the run's
+:class:`~dolfinx_friction.scene.workspace.Workspace` (meshes, spaces, compiled forms and
+expressions, reused where the next point's scene agrees: results bit for bit those of a
+fresh process): each ``main()`` builds its contact pairs, solvers and PETSc options afresh
+and removes them.
 """
 from __future__ import annotations
 
@@ -18,15 +22,18 @@ import json
 import os
 import sys
 import tempfile
+from typing import Optional
 
 from dolfinx_friction.cli.exits import EXIT_INTERNAL
+from dolfinx_friction.scene.workspace import Workspace
 
 #: exit statuses after which the worker stops (the point was interrupted)
 STOPPING = (130, 143)
 
 
-def run_captured(argv: list[str]) -> tuple[int, str]:
-    """Run one command line in this process: its exit status and its stderr."""
+def run_captured(argv: list[str], workspace: Optional[Workspace] = None) -> tuple[int, str]:
+    """Run one command line in this process (with ``workspace``): its exit status and its
+    stderr."""
     from dolfinx_friction.cli import frontend
     with tempfile.TemporaryFile(mode="w+") as err, open(os.devnull, "w") as null:
         sys.stdout.flush()
@@ -35,7 +42,7 @@ def run_captured(argv: list[str]) -> tuple[int, str]:
         os.dup2(null.fileno(), 1)
         os.dup2(err.fileno(), 2)
         try:
-            status = frontend.main(argv)
+            status = frontend.main(argv, workspace)
         except SystemExit as exc:  # (argparse's errors)
             status = exc.code if isinstance(exc.code, int) else EXIT_INTERNAL
         finally:
@@ -49,10 +56,22 @@ def run_captured(argv: list[str]) -> tuple[int, str]:
         return status, err.read()
 
 
+def warm() -> None:
+    """Import what every run imports (mpi4py, dolfinx, the form compiler, PETSc, the
+    contact kernels), as a ``run`` would, MPI without the singleton daemon; initialise
+    numba (:func:`~dolfinx_friction.contact.backend.warm`)."""
+    from dolfinx_friction.cli import frontend, mpi  # noqa: F401  (the commands)
+    mpi.no_singleton_daemon()
+    import dolfinx_friction.scene.runner  # noqa: F401
+    from dolfinx_friction.contact import backend
+    backend.warm()
+
+
 def main() -> int:
-    protocol = sys.stdout
+    warm()
+    protocol, workspace = sys.stdout, Workspace()
     for line in sys.stdin:
-        status, stderr = run_captured(json.loads(line))
+        status, stderr = run_captured(json.loads(line), workspace)
         protocol.write(json.dumps({"status": status, "stderr": stderr}) + "\n")
         protocol.flush()
         if status in STOPPING:

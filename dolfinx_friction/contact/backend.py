@@ -83,3 +83,14 @@ def compiled() -> Optional[ModuleType]:
 def active() -> str:
     """``"numba"`` or ``"numpy"``: what the next call will run."""
     return "numpy" if compiled() is None else "numba"
+
+
+def warm() -> None:
+    """Initialise numba's typing and target contexts now, as a first kernel call would
+    (~0.15 s CPU): for a process that runs kernels later (a sweep's worker, while it waits
+    for its first point).  Nothing when the numpy reference is in use."""
+    if compiled() is None:
+        return
+    from numba.core.registry import cpu_target
+    cpu_target.typing_context.refresh()
+    cpu_target.target_context.refresh()

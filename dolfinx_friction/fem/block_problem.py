@@ -43,9 +43,11 @@ class BlockProblem:
 
     Parameters
     ----------
-    residuals : sequence of ufl.Form
+    residuals : sequence of ufl.Form or BodyForms
         One UFL residual form per body, ``F_i(u_i; v_i)`` (internal minus external virtual
-        work), linear in the test function.
+        work), linear in the test function; or the body's forms compiled already (a
+        :class:`~dolfinx_friction.fem.body_forms.BodyForms` of ``u_i``, without bcs; its
+        Jacobian is its own).
     u : sequence of dolfinx Functions
         The bodies' displacements (vector Lagrange spaces of the mesh dimension); their
         values are the initial guess and, after a solve, the solution.
@@ -87,9 +89,7 @@ class BlockProblem:
                 raise ContactSetupError(f"{c.name}: built for another number of obstacles")
         self.bcs, self.contacts, self.n_obstacles = list(bcs), list(contacts), obstacles
         jacobians = jacobians or [None] * len(u)
-        self.bodies = [BodyForms(F, w, J, [bc for bc in bcs
-                                       if compat.bc_on_space(bc, w.function_space)])
-                       for F, w, J in zip(residuals, u, jacobians)]
+        self.bodies = [self._body_forms(F, w, J) for F, w, J in zip(residuals, u, jacobians)]
         self.layout = DofLayout(self.comm, [V.dofmap.index_map for V in self.spaces], obstacles)
         n = self.layout.n_owned * self.gdim
         self.x = PETSc.Vec().createMPI((n, PETSc.DETERMINE), comm=self.comm)
@@ -123,6 +123,16 @@ class BlockProblem:
         self.guards: list = []
         #: why the last evaluated iterate was inadmissible ("" if it was not)
         self.inadmissible = ""
+
+    def _body_forms(self, F, u, J: Optional[ufl.Form]) -> BodyForms:
+        """A body's compiled forms (those given, checked against ``u`` and the bcs)."""
+        bcs = [bc for bc in self.bcs if compat.bc_on_space(bc, u.function_space)]
+        if not isinstance(F, BodyForms):
+            return BodyForms(F, u, J, bcs)
+        if F.u is not u or bcs or J is not None:
+            raise ContactSetupError("compiled body forms are given for their own u, without "
+                                    "bcs on its space and without a Jacobian form")
+        return F
 
     @property
     def linear(self) -> bool:

@@ -91,7 +91,8 @@ class BlockJacobian:
         d = p.gdim
         blocks, values = [], []
         for k, body in enumerate(p.bodies):
-            compat.assemble_matrix_into(body.A, body.J)  # a new matrix: zero before
+            body.A.zeroEntries()  # (the body's forms may come from an earlier problem)
+            compat.assemble_matrix_into(body.A, body.J)
             indptr, cols, data = body.A.getValuesCSR()
             values.append(data)
             rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))

@@ -2,9 +2,10 @@
 
 Every file the package writes whole (``summary.json``, ``sweep.csv``, the XDMF time
 series, charts and pictures, mesh-cache entries) is written through :func:`atomic_path`:
-into a hidden temporary file beside it, flushed to disk, then renamed into place.  A
-reader, or a kill at any moment, sees the old file or the new one, never a part; a kill
-may leave the hidden ``.<stem>.<token>.partial<suffix>`` file, which is never a result.
+into a hidden temporary file beside it, flushed to disk (unless the caller syncs later),
+then renamed into place.  A reader, or a kill at any moment, sees the old file or the new
+one, never a part; a kill may leave the hidden ``.<stem>.<token>.partial<suffix>`` file,
+which is never a result.
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Optional, Union
 
-__all__ = ["atomic_path", "file_fault", "write_atomic"]
+__all__ = ["atomic_path", "file_fault", "sync", "write_atomic"]
 
 
 def file_fault(path: Union[str, Path]) -> Optional[str]:
@@ -44,30 +45,37 @@ def file_fault(path: Union[str, Path]) -> Optional[str]:
 
 
 @contextlib.contextmanager
-def atomic_path(path: Union[str, Path]) -> Iterator[Path]:
+def atomic_path(path: Union[str, Path], durable: bool = True) -> Iterator[Path]:
     """A temporary path to write the new content of ``path`` into, for the ``with`` block.
 
     The temporary file is hidden, beside ``path``, with its suffix (writers that choose
     the format by the suffix see the right one) and a name of its own per call
     (concurrent writers of one path do not mix).  When the block ends it is synced to
-    disk and renamed onto ``path``; when the block raises it is removed.
+    disk (``durable``; else it is the caller's to :func:`sync` later) and renamed onto
+    ``path``; when the block raises it is removed.
     """
     path = Path(path)
     tmp = path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(4)}.partial"
                          f"{path.suffix}")
     try:
         yield tmp
-        fd = os.open(tmp, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
+        if durable:
+            sync(tmp)
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
 
 
-def write_atomic(path: Union[str, Path], data: Union[str, bytes]) -> None:
+def sync(path: Union[str, Path]) -> None:
+    """Flush a written file to disk (``fsync``)."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def write_atomic(path: Union[str, Path], data: Union[str, bytes], durable: bool = True) -> None:
     """Write ``data`` (text as UTF-8) to ``path`` through :func:`atomic_path`."""
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+    with atomic_path(path, durable) as tmp, open(tmp, "wb") as f:
         f.write(data.encode() if isinstance(data, str) else data)

@@ -1,11 +1,13 @@
 """Results of a run: history.csv, contact.csv, summary.json and XDMF fields.
 
 Tables are written by rank 0.  Every converged increment is appended in one
-``write`` and flushed to disk (``fsync``) before the next increment starts;
-field files of an increment are written into a scratch folder
-(``fields/.<name>.partial``) that is renamed into place when complete.  A run
-killed at any moment therefore leaves the increments already converged complete
-and readable.
+``write`` before the next increment starts; field files of an increment are written
+into a scratch folder (``fields/.<name>.partial``) that is renamed into place when
+complete.  A run killed at any moment therefore leaves the increments already converged
+complete and readable (the kernel keeps what a killed process wrote).  The tables and
+time series are flushed to disk (``fsync``) once, when the solve ends, before
+``summary.json`` (itself synced): an ``fsync`` per increment cost up to 5 ms each, four
+per increment, on a disk shared with other jobs.
 
 What a killed run leaves, precisely.  For each increment the files are written
 in this order: the rows of ``contact.csv``, the field folder
@@ -58,7 +60,7 @@ from dolfinx_friction.contact.element import STATUS_NAMES
 from dolfinx_friction.errors import OutputError
 from dolfinx_friction.fem.contact_fields import SLAVE_COLUMNS, slave_rows
 from dolfinx_friction.scene.build import ContactProblem
-from dolfinx_friction.io.files import write_atomic
+from dolfinx_friction.io.files import sync, write_atomic
 from dolfinx_friction.scene.provenance import file_sha256
 from dolfinx_friction.scene.driver import Increment, RunSummary
 
@@ -84,9 +86,9 @@ def _fault(path: Path, exc: BaseException) -> str:
 
 
 def _append(path: Path, text: str) -> None:
-    """Append whole lines with one ``write`` (continued should it be short), then fsync.
-    A write that fails (a full disk) is undone: the file is cut back to its former
-    length, so that no partial line is left (truncating frees space, it needs none)."""
+    """Append whole lines with one ``write`` (continued should it be short).  A write that
+    fails (a full disk) is undone: the file is cut back to its former length, so that no
+    partial line is left (truncating frees space, it needs none)."""
     data = memoryview(text.encode())
     fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
     try:
@@ -94,7 +96,6 @@ def _append(path: Path, text: str) -> None:
         try:
             while data:
                 data = data[os.write(fd, data):]
-            os.fsync(fd)
         except OSError:
             os.ftruncate(fd, size)
             raise
@@ -274,11 +275,11 @@ class ResultWriter:
 
     def _append_contact(self, inc: Increment, table: np.ndarray) -> None:
         table = table[np.argsort(table[:, 0], kind="stable")]
-        lines = []
-        for row in table:
-            values = [inc.step, inc.increment, int(row[0])] + [float(v) for v in row[1:-1]]
-            lines.append(_fmt(values) + "," + STATUS_NAMES[int(row[-1])])
-        _append(self.dir / "contact.csv", "".join(line + "\n" for line in lines))
+        # (as _fmt writes them: "%.17g" is the format of f"{v:.17g}")
+        line = f"{inc.step},{inc.increment},%d,{','.join(['%.17g'] * (table.shape[1] - 2))},%s\n"
+        _append(self.dir / "contact.csv", "".join(
+            line % (int(row[0]), *row[1:-1].tolist(), STATUS_NAMES[int(row[-1])])
+            for row in table))
 
     # ---------------------------------------------------------------- summary
     def summary(self, run: RunSummary, extra: Optional[dict] = None) -> None:
@@ -312,10 +313,17 @@ class ResultWriter:
             "failure": run.failure or None,
         }
         data.update(extra or {})
+        written = [self.dir / "history.csv"] + ([self.dir / "contact.csv"] if
+                                                self.contact_table else [])
+        if self.fields:
+            written += self._field_writer.series_files()
         try:
-            write_atomic(self.dir / "summary.json", json.dumps(data, indent=2) + "\n")
+            for path in written:
+                sync(path)
+            path = self.dir / "summary.json"
+            write_atomic(path, json.dumps(data, indent=2) + "\n")
         except OSError as exc:
-            return _fault(self.dir / "summary.json", exc)
+            return _fault(path, exc)
         return None
 
 
@@ -335,9 +343,15 @@ class FieldWriter:
         _silence_hdf5()
         self._size = 0  # bytes of the last increment's field folder and time series
         self._series: dict[str, list[str]] = {f.body.name: [] for f in problem.fields}
-        self.outputs = [output_spaces(f) for f in problem.fields]
-        # compiled once: a form compiler cache hit still costs ~10 ms per expression
-        self.stresses = [self._stresses(f) for f in problem.fields]
+        # compiled once (and kept in the problem's workspace for later runs): a form
+        # compiler cache hit still costs ~10 ms per expression
+        self.outputs = [problem.shared(("output spaces", id(f.V)),
+                                       lambda f=f: (f.V, output_spaces(f)))[1]
+                        for f in problem.fields]
+        self.stresses = [problem.shared(("stresses", id(f.u), f.body),
+                                        lambda f=f: (f.u, self._stresses(f)))[1]
+                         for f in problem.fields]
+        self._functions: list[dict] = [{} for _ in problem.fields]  # output Functions by name
 
     def _stresses(self, field) -> list:
         """Cell functions and the expressions that fill them: the Cauchy stress
@@ -362,13 +376,14 @@ class FieldWriter:
                 error = _fault(self.dir / name, exc)
         _collective(comm, error)
         self.problem.system.scatter()
-        for field, spaces, stresses in zip(self.problem.fields, self.outputs, self.stresses):
+        for field, spaces, stresses, kept in zip(self.problem.fields, self.outputs,
+                                                 self.stresses, self._functions):
             path = scratch / f"{field.body.name}.xdmf"
             for f, expression in stresses:
                 f.interpolate(expression)
             try:  # HDF5 writes collectively: every rank sees the failure
                 write_fields(path, field, spaces, self.problem.contact_fields(field), inc.t,
-                             [f for f, _ in stresses])
+                             [f for f, _ in stresses], kept)
             except (RuntimeError, OSError) as exc:
                 error = _fault(self.dir / name / path.name, exc)
             if comm.allreduce(error is not None):  # (any rank: the others must stop too)
@@ -387,6 +402,10 @@ class FieldWriter:
             error = error or self._extend_series(self.dir / name, inc.t)
         _collective(comm, error)
 
+    def series_files(self) -> list[Path]:
+        """The time series written so far."""
+        return [self.dir / f"{name}.xdmf" for name, grids in self._series.items() if grids]
+
     def _extend_series(self, folder: Path, t: float) -> Optional[str]:
         """Add the increment in ``folder`` (in place) to every body's time series
         ``fields/<body>.xdmf``, each rewritten atomically (rank 0); why not, or None.  A
@@ -400,12 +419,13 @@ class FieldWriter:
         for name, series in grids.items():
             path = self.dir / f"{name}.xdmf"
             try:
-                write_atomic(path, time_series.collection(name, series))
+                write_atomic(path, time_series.collection(name, series), durable=False)
             except OSError as exc:
                 try:  # the series written already drop this increment, then its folder goes
                     for done in written:
                         write_atomic(self.dir / f"{done}.xdmf",
-                                      time_series.collection(done, self._series[done]))
+                                     time_series.collection(done, self._series[done]),
+                                     durable=False)
                     shutil.rmtree(folder)
                 except OSError:
                     pass  # the folder stays, complete, as a series written refers to it

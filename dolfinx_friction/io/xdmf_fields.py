@@ -7,6 +7,7 @@ where k != g (:func:`output_spaces`).  Version differences go through :mod:`_com
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 
@@ -27,24 +28,29 @@ def output_spaces(field) -> dict:
             "scalar_out": scalar if k == g else compat.scalar_space(mesh, g)}
 
 
-def _output_function(values: np.ndarray, space_in, space_out, name: str):
-    """A Function named ``name`` on ``space_out`` from owned ``values`` on ``space_in``."""
-    f = compat.function(space_in)
-    n = values.size
-    f.x.array[:n] = values.ravel()
+def _output_function(values: np.ndarray, space_in, space_out, name: str, kept: dict):
+    """A Function named ``name`` on ``space_out`` from owned ``values`` on ``space_in``;
+    the Functions are ``kept[name]`` from one call to the next (refilled from zero)."""
+    if name not in kept:
+        f = compat.function(space_in)
+        kept[name] = f, f if space_out is space_in else compat.function(space_out)
+    f, g = kept[name]
+    f.x.array[:] = 0.0
+    f.x.array[:values.size] = values.ravel()
     compat.scatter_forward(f)
-    if space_out is not space_in:
-        g = compat.function(space_out)
+    if g is not f:
+        g.x.array[:] = 0.0
         g.interpolate(f)
-        f = g
-    f.name = name
-    return f
+    g.name = name
+    return g
 
 
 def write_fields(path: Path, field, spaces: dict, nodal: dict[str, np.ndarray], t: float,
-                 cell_functions=()) -> None:
+                 cell_functions=(), kept: Optional[dict] = None) -> None:
     """The displacement, the nodal contact values (owned nodes, (n, 1) or (n, gdim)) and
-    the cell functions of a body at pseudo-time ``t`` into one XDMF file (collective)."""
+    the cell functions of a body at pseudo-time ``t`` into one XDMF file (collective);
+    ``kept``: the output Functions by name, for the next call (made here when missing)."""
+    kept = {} if kept is None else kept
     from dolfinx.io import XDMFFile
     mesh = field.V.mesh
     owned = field.n_owned
@@ -52,11 +58,11 @@ def write_fields(path: Path, field, spaces: dict, nodal: dict[str, np.ndarray], 
         xdmf.write_mesh(mesh)
         u = field.u.x.array[: owned * field.gdim]
         xdmf.write_function(_output_function(u, spaces["vector_in"], spaces["vector_out"],
-                                             "displacement"), t)
+                                             "displacement", kept), t)
         for name, values in nodal.items():
             kind = "vector" if values.shape[1] > 1 else "scalar"
             xdmf.write_function(_output_function(values[:owned], spaces[f"{kind}_in"],
-                                                 spaces[f"{kind}_out"], name), t)
+                                                 spaces[f"{kind}_out"], name, kept), t)
         for f in cell_functions:
             xdmf.write_function(f, t)
     if mesh.comm.rank == 0:

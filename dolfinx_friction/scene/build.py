@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Optional
+from typing import Callable, Optional, TypeVar
 
 import numpy as np
 import ufl
@@ -32,6 +32,10 @@ from dolfinx_friction.scene.model import Body, ContactPair, Scene
 from dolfinx_friction.scene.validation import ModelError
 from dolfinx_friction.fem.node_to_surface import ContactSetupError, NodeToSurface, Surface, make_law
 from dolfinx_friction.fem.block_problem import BlockProblem
+from dolfinx_friction.fem.body_forms import BodyForms
+from dolfinx_friction.scene.workspace import Workspace, file_key
+
+T = TypeVar("T")
 
 
 @dataclass
@@ -179,17 +183,33 @@ class DiscreteScene:
     """
 
     def __init__(self, scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD,
-                 meshes: Optional[gmsh_io.MeshSet] = None):
+                 meshes: Optional[gmsh_io.MeshSet] = None,
+                 workspace: Optional[Workspace] = None):
         self.scene, self.comm = scene, comm
+        #: what this problem takes from and leaves to later runs (None: nothing shared)
+        self.workspace = workspace if meshes is None else None
         names = [b.name for b in scene.bodies]
-        self.meshes = meshes or gmsh_io.load_mesh(scene.mesh, names, comm)
+        mesh_key = None
+        if self.workspace is not None:
+            try:
+                mesh_key = ("meshes", file_key(scene.mesh), tuple(names), comm.py2f())
+            except (OSError, TypeError):  # (no such file: the loader says so)
+                pass
+        self.meshes = meshes or self.shared(
+            mesh_key, lambda: gmsh_io.load_mesh(scene.mesh, names, comm))
         self.gdim = self.meshes.gdim
         validation.check_groups(scene, self.meshes)
-        fields, self.layout = make_fields(
-            comm, [self.meshes.bodies[b.name] for b in scene.bodies], len(scene.rigids),
-            degrees=[b.degree for b in scene.bodies],
-            thicknesses=[b.thickness for b in scene.bodies],
-            axisymmetric=[b.axisymmetric for b in scene.bodies])
+        discretisation = (len(scene.rigids), tuple(b.degree for b in scene.bodies),
+                          tuple(b.thickness for b in scene.bodies),
+                          tuple(b.axisymmetric for b in scene.bodies))
+        fields, self.layout = self.shared(
+            mesh_key and ("fields", mesh_key, discretisation), lambda: make_fields(
+                comm, [self.meshes.bodies[b.name] for b in scene.bodies], len(scene.rigids),
+                degrees=[b.degree for b in scene.bodies],
+                thicknesses=[b.thickness for b in scene.bodies],
+                axisymmetric=[b.axisymmetric for b in scene.bodies]))
+        for f in fields:  # (kept from another run: its displacement goes)
+            f.u.x.array[:] = 0.0
         self.fields = [SceneField.of(f, b) for f, b in zip(fields, scene.bodies)]
         for i, f in enumerate(self.fields):
             fault = section_fault(f) if f.axisymmetric else ""
@@ -201,6 +221,13 @@ class DiscreteScene:
         validation.check_bcs(scene, self.fields, self.meshes.group_bodies, comm)
         self.pairs = {f"{c.slave}->{c.master}": self._pair(c, f"contact.{i}")
                       for i, c in enumerate(scene.contacts)}
+
+    def shared(self, key: Optional[tuple], make: Callable[[], T]) -> T:
+        """``make()``, or the object the workspace kept for ``key`` (None: not shared); the
+        key holds all the object depends on (an object by ``id``: the value holds it)."""
+        if key is None or self.workspace is None:
+            return make()
+        return self.workspace.get(key, make)
 
     # ------------------------------------------------------------ lookups
     def body_field(self, name: str) -> SceneField:
@@ -278,13 +305,13 @@ class ContactProblem(DiscreteScene):
     """
 
     def __init__(self, scene: Scene, comm: MPI.Comm = MPI.COMM_WORLD,
-                 meshes: Optional[gmsh_io.MeshSet] = None):
-        super().__init__(scene, comm, meshes)
+                 meshes: Optional[gmsh_io.MeshSet] = None,
+                 workspace: Optional[Workspace] = None):
+        super().__init__(scene, comm, meshes, workspace)
         self.follower_pressures = self._follower_pressures()
-        forms = [self._forms(f) for f in self.fields]
-        self.system = BlockProblem([F for F, _ in forms], [f.u for f in self.fields],
+        self.system = BlockProblem([self._compiled(f) for f in self.fields],
+                                   [f.u for f in self.fields],
                                    contacts=list(self.pairs.values()),
-                                   jacobians=[J for _, J in forms],
                                    obstacles=len(scene.rigids),
                                    names=[b.name for b in scene.bodies])
         self.system.guards += [self._inversion_guard(f) for f in self.fields
@@ -302,6 +329,16 @@ class ContactProblem(DiscreteScene):
                     if f.body.finite_strain and (f.body.name, load.on) not in out:
                         out[(f.body.name, load.on)] = compat.scalar_constant(f.V.mesh, 0.0)
         return out
+
+    def _compiled(self, field: SceneField) -> BodyForms:
+        """A body's compiled forms; shared through the workspace (by its displacement and
+        material) unless a follower pressure loads it (its Constant is this problem's)."""
+        def compile_forms() -> BodyForms:
+            F, J = self._forms(field)
+            return BodyForms(F, field.u, J, [])
+        followed = any(body == field.body.name for body, _ in self.follower_pressures)
+        return self.shared(None if followed else ("forms", id(field.u), field.body),
+                            compile_forms)
 
     def _forms(self, field: BodyField) -> tuple[ufl.Form, Optional[ufl.Form]]:
         F, J = body_forms(field)

@@ -18,6 +18,7 @@ from dolfinx_friction.scene.control import RunControl, checkpoint
 from dolfinx_friction.scene.provenance import provenance
 from dolfinx_friction.scene.toml import SceneError, default_output_dir, load_scene
 from dolfinx_friction.scene.driver import ConvergenceError, Increment, RunSummary, Solver
+from dolfinx_friction.scene.workspace import Workspace
 
 
 log = logging.getLogger(__name__)
@@ -64,7 +65,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         comm: MPI.Comm = MPI.COMM_WORLD, petsc_options: Optional[dict] = None,
         reuse_factorisation: Optional[bool] = None,
         progress: Optional[Callable[[Increment], None]] = None,
-        control: Optional[RunControl] = None) -> RunResult:
+        control: Optional[RunControl] = None,
+        workspace: Optional[Workspace] = None) -> RunResult:
     """Solve a scene (a :class:`Scene` or a scene file) and write its results.
 
     ``overrides`` (``KEY=VALUE`` as ``--set`` takes them) apply to a scene file only (a
@@ -73,7 +75,10 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     ``progress`` is called with every converged increment once it is written (e.g. a
     :class:`~dolfinx_friction.cli.progress.Progress`; on every rank where it is given);
     ``control`` (:mod:`~dolfinx_friction.scene.control`, on every rank) follows the run
-    and may stop it at a checkpoint (:class:`~dolfinx_friction.errors.Interrupted`).
+    and may stop it at a checkpoint (:class:`~dolfinx_friction.errors.Interrupted`);
+    ``workspace`` (:mod:`~dolfinx_friction.scene.workspace`) keeps the meshes, spaces and
+    compiled forms for the next run given it, and gives this one what the last one kept
+    (the same results, bit for bit).
     Nothing is printed: warnings (a penalty too soft for the mesh, nodes that slid off
     their master) and notices go to the ``dolfinx_friction`` logger, from rank 0;
     ``petsc_options`` (without prefix) set the linear solver; ``reuse_factorisation``
@@ -88,7 +93,9 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     elif overrides:
         raise SceneError("overrides apply to a scene file; change a Scene object with "
                          "dataclasses.replace", key="overrides")
-    problem = ContactProblem(scene, comm)
+    if workspace is not None:
+        workspace.start()
+    problem = ContactProblem(scene, comm, workspace=workspace)
     petsc_options, reuse_factorisation = linear_solver(problem, petsc_options,
                                                        reuse_factorisation)
     solver = Solver(problem, petsc_options=petsc_options,

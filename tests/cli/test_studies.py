@@ -10,8 +10,11 @@ draw (Debian 13's VTK renders through X only: run them under ``xvfb-run``).
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -159,6 +162,26 @@ def test_split_values():
     assert split_values("[0,0,-1],[0, 0, -2]") == ["[0,0,-1]", "[0, 0, -2]"]
     assert split_values('"a,b",\'c,d\',{x = [1,2]}') == ['"a,b"', "'c,d'", "{x = [1,2]}"]
     assert split_values(r'"a\",b",c') == [r'"a\",b"', "c"]
+
+
+def test_worker_pool_killed_on_bad_input_ended_otherwise():
+    """The workers start with the pool (importing while the sweep validates): a block that
+    raises before any point ran kills them (a bad point is answered at once), and so are
+    workers that were given no point (those that ran points end at the end of their input:
+    every sweep test)."""
+    from dolfinx_friction.cli.sweep import WorkerPool
+    for bad in (True, False):
+        with contextlib.suppress(ValueError), WorkerPool(2) as pool:
+            procs = [w.proc for w in pool.idle]
+            assert all(p.returncode is None for p in procs)
+            if bad:
+                raise ValueError("a bad point")
+        assert [p.returncode for p in procs] == [-signal.SIGKILL] * 2
+
+
+def test_jobs_default_to_the_cores():
+    from dolfinx_friction.cli.sweep import default_jobs
+    assert default_jobs() == len(os.sched_getaffinity(0))
 
 
 # ------------------------------------------------------------------------------ plot
