@@ -14,6 +14,7 @@ from __future__ import annotations
 from typing import Optional
 
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 __all__ = ["FreeRows"]
@@ -34,8 +35,10 @@ class FreeRows:
         self._x: Optional[PETSc.Vec] = None
 
     def _index_set(self, J: PETSc.Mat, constrained: np.ndarray) -> None:
-        """The free rows as a parallel index set (collective when the rows changed)."""
-        if self._constrained is not None and np.array_equal(constrained, self._constrained):
+        """The free rows as a parallel index set; collective: every rank makes it anew
+        when the rows changed on any rank."""
+        same = self._constrained is not None and np.array_equal(constrained, self._constrained)
+        if J.getComm().tompi4py().allreduce(same, op=MPI.LAND):
             return
         self._constrained = constrained.copy()
         start, end = J.getOwnershipRange()
