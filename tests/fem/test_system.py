@@ -268,6 +268,23 @@ def test_condensed_solve_gives_the_direct_answer(shared_dir, mu):
         assert [i.iterations for i in condensed] == [i.iterations for i in reference]
 
 
+def test_exchange_counts_what_the_searches_sent(shared_dir):
+    """``NodeToSurface.exchange()``: per rank, the boxes allgathered (48 B each in 3D) and
+    the master faces sent point to point (136 B a Q4 face); what the ranks sent is what they
+    received; nothing goes between ranks serially."""
+    mesh = meshes.two_boxes(shared_dir / "boxes.msh")
+    _, solver = _solve(_boxes_scene(mesh, mu=0.3))
+    comm = solver.comm
+    ex = solver.system.contacts[0].exchange()
+    assert ex.searches > 0 and comm.allreduce(ex.faces) > 0
+    assert 0 < ex.box_bytes <= 48 * comm.size * ex.searches
+    sent, received = comm.allreduce(ex.face_bytes_sent), comm.allreduce(ex.face_bytes_received)
+    assert sent == received == 136 * comm.allreduce(ex.faces_sent)
+    assert comm.allreduce(ex.faces_received) == comm.allreduce(ex.faces_sent)
+    if comm.size == 1:
+        assert sent == 0 and ex.gathered == 0
+
+
 @pytest.mark.parametrize("mu", [0.0, 0.3])
 def test_frictionless_linear_jacobian_is_symmetric_and_factorised_ldlt(shared_dir, mu):
     """Linear bodies: the Jacobian is symmetric iff the contact is frictionless
