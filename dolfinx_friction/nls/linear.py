@@ -317,6 +317,7 @@ class Condensed:
         self._G = np.zeros((0, 0))
         self._known = np.zeros(0, bool)  # per surface dof: its column of G is computed
         self._column = np.zeros(0, np.int64)  # per surface dof: its column in _G
+        self._active = np.zeros(0, np.int64)  # the dofs where C is not zero (global)
         self._gather: Optional[PETSc.Scatter] = None  # a vector's active entries, to all
         self._v_A: Optional[PETSc.Vec] = None  # (n_active,) on every rank
         self.columns = 0  # back-solves spent on G
@@ -448,7 +449,10 @@ class Condensed:
 
     def _set_active(self, active: np.ndarray) -> None:
         """The active dofs (global, sorted): this rank's among them, and the scatter that
-        gives every rank a vector's values at all of them."""
+        gives every rank a vector's values at all of them (kept while they are the same)."""
+        if self._gather is not None and np.array_equal(active, self._active):
+            return
+        self._active = active
         start, end = self._K.getOwnershipRange()
         owned = (active >= start) & (active < end)
         self._owned, self._local = owned, active[owned] - start
