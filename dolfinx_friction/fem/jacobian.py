@@ -31,12 +31,13 @@ __all__ = ["BlockJacobian", "JacobianSplit"]
 
 @dataclass
 class JacobianSplit:
-    """The Jacobian ``J = K + C`` (serial): ``bulk`` is ``K``, the bodies' constant
-    stiffness with the constrained rows made identity rows (a PETSc matrix, the same object
+    """The Jacobian ``J = K + C``: ``bulk`` is ``K``, the bodies' constant stiffness with
+    the constrained rows made identity rows (a distributed PETSc matrix, the same object
     while it does not change); ``C``, the contact tangent (zero in constrained rows), is the
-    sum of the ``values`` at ``(rows, cols)`` (repeated pairs add), all within the contact
-    surfaces' ``dofs`` (sorted).  With ``symmetric`` (``K`` is), the constrained columns
-    are zero in both: ``J`` is ``jacobian(x, symmetric=True)``."""
+    sum over the ranks of their ``values`` at global ``(rows, cols)`` (this rank's elements'
+    entries; repeated pairs add), all within the contact surfaces' global ``dofs`` (sorted,
+    of every rank: the same on all).  With ``symmetric`` (``K`` is), the constrained
+    columns are zero in both: ``J`` is ``jacobian(x, symmetric=True)``."""
 
     bulk: PETSc.Mat
     dofs: np.ndarray
@@ -80,7 +81,8 @@ class BlockJacobian:
         self._static: Optional[tuple] = None  # (key, free obstacle rows, Jacobian without contact)
         self._coupling_slots: Optional[tuple] = None  # (key, contacts' slots, zeroed ones)
         self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
-        self._surface_dofs: Optional[np.ndarray] = None  # of all contacts (fixed in serial)
+        self._surface_dofs: Optional[np.ndarray] = None  # of all contacts and ranks (fixed)
+        self._constrained: Optional[tuple] = None  # (constrained rows, their global dofs)
         self._modes: Optional[PETSc.NullSpace] = None
         self._spring = 0.0
 
@@ -189,8 +191,7 @@ class BlockJacobian:
         key = (self._pattern, rows, symmetric)
         cached = self._zeroed
         if cached is None or not _same(cached[0], key):
-            columns = (np.concatenate(self.problem.comm.allgather(self.global_rows(rows)))
-                       if symmetric else None)
+            columns = self.constrained_dofs() if symmetric else None
             self._zeroed = cached = (key, self._pattern.row_slots(rows, columns))
         return cached[1]
 
@@ -217,6 +218,16 @@ class BlockJacobian:
         contact[zeroed] = 0.0
         return slots, static[slots] + contact
 
+    def constrained_dofs(self) -> np.ndarray:
+        """Sorted global dofs of the constrained rows of every rank (collective; kept while
+        the rows are the same object)."""
+        rows = self.problem.constrained_rows
+        if self._constrained is None or self._constrained[0] is not rows:
+            mine = self.global_rows(rows)
+            self._constrained = (rows, np.unique(np.concatenate(
+                self.problem.comm.allgather(mine))).astype(mine.dtype))
+        return self._constrained[1]
+
     def global_rows(self, rows: np.ndarray) -> np.ndarray:
         """Global indices of owned local rows."""
         return (rows + self.problem.x.getOwnershipRange()[0]).astype(PETSc.IntType)
@@ -225,10 +236,9 @@ class BlockJacobian:
         """The Jacobian at the contacts' last update as a constant bulk matrix plus a
         contact part supported on the contact surfaces (no matrix is filled), or None where
         that split does not hold or is not implemented: a body that is not linear, rigid
-        obstacles (their rows have no bulk stiffness), several ranks (the contact entries
-        and dofs are local indices)."""
+        obstacles (their rows have no bulk stiffness).  Collective."""
         p = self.problem
-        if not p.linear or p.n_obstacles or p.comm.size > 1 or not p.contacts:
+        if not p.linear or p.n_obstacles or not p.contacts:
             return None
         rows = p.constrained_rows
         with p.timers.measure("bulk_assembly"):
@@ -245,16 +255,15 @@ class BlockJacobian:
                     K.zeroRowsColumns(self.global_rows(rows), diag=1.0)
                 self._bulk_bc = (rows, K)
         with p.timers.measure("contact_assembly"):
-            free = np.ones(p.layout.n_owned * p.gdim, bool)
-            free[rows] = False
+            fixed = self.constrained_dofs()
             entries = [c.element_entries() for c in p.contacts]
             r, k, v = (np.concatenate(e) for e in zip(*entries))
-            keep = (v != 0.0) & free[r]
+            keep = (v != 0.0) & ~np.isin(r, fixed)
             if p.bodies_symmetric():  # the constrained columns eliminated, as in K
-                keep &= free[k]
+                keep &= ~np.isin(k, fixed)
             if self._surface_dofs is None:
-                self._surface_dofs = np.unique(np.concatenate(
-                    [c.surface_dofs() for c in p.contacts]))
+                mine = np.concatenate([c.surface_dofs() for c in p.contacts])
+                self._surface_dofs = np.unique(np.concatenate(p.comm.allgather(mine)))
         return JacobianSplit(self._bulk_bc[1], self._surface_dofs, r[keep], k[keep], v[keep],
                              p.bodies_symmetric())
 

@@ -30,7 +30,7 @@ is a pressure per length.
 from __future__ import annotations
 
 import uuid
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Optional, Sequence, Union
 
 import numpy as np
@@ -50,7 +50,7 @@ from dolfinx_friction.fem.numbering import BodyField, DofLayout
 from dolfinx_friction.fem.obstacles import (  # noqa: F401  (rigid_*: re-exported)
     Obstacle, SignedDistance, _vector, rigid_cylinder, rigid_plane, rigid_sdf, rigid_sphere,
     rotation_size)
-from dolfinx_friction.fem.pairing import ContactInteraction, RigidMaster
+from dolfinx_friction.fem.pairing import ContactInteraction, Exchange, RigidMaster
 from dolfinx_friction.fem.surfaces import SlaveNodes, master_faces
 from dolfinx_friction.fem.tagged_mesh import BodyMesh
 from dolfinx_friction.rules import SceneError, modulus
@@ -764,6 +764,11 @@ class NodeToSurface:
         return Support(self._slave_field.block, None if master is None else master.block,
                        self._obstacle, self.mu > 0.0,
                        self._interaction.slaves.X[s] + self._u_slaves[s], normal)
+
+    def exchange(self) -> Exchange:
+        """What this rank sent and received for the pair's searches so far
+        (:class:`~dolfinx_friction.fem.pairing.Exchange`; a copy, not collective)."""
+        return replace(self._interaction.exchange)
 
     def counts(self) -> tuple[int, int]:
         """Slave nodes in contact (closed) and slipping, over all ranks (collective)."""

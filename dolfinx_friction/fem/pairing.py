@@ -44,6 +44,9 @@ class NodeValues:
     def __init__(self, template: PETSc.Vec, nodes: np.ndarray, gdim: int):
         idx = (np.asarray(nodes, dtype=np.int64).reshape(-1, 1) * gdim + np.arange(gdim)).ravel()
         self.gdim = gdim
+        start, end = template.getOwnershipRange()
+        #: entries gathered from other ranks at each call
+        self.remote = int(np.count_nonzero((idx < start) | (idx >= end)))
         self.local = PETSc.Vec().createSeq(len(idx), comm=PETSc.COMM_SELF)
         index_set = PETSc.IS().createGeneral(idx.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = PETSc.Scatter().create(template, index_set, self.local, None)
@@ -112,6 +115,25 @@ class RigidMaster:
         """The pose of the converged increment (translation ``U``) becomes the start pose."""
         self.rotation_n = self.rotation.copy()
         self.translation_n = np.asarray(U, float).copy()
+
+
+@dataclass
+class Exchange:
+    """What this rank's part of a pair sent and received for its searches, in bytes of the
+    arrays (without MPI's and pickle's envelopes): the search's box exchange is an
+    allgather (each rank receives every rank's box, 2 gdim floats), the master faces go
+    point to point (alltoall; a face: its node numbers, reference coordinates, global id).
+    ``gathered``: displacement values this rank gathers from other ranks at every
+    evaluation since the last search (its slave nodes' and the received faces' nodes)."""
+
+    searches: int = 0
+    box_bytes: int = 0  # received in the boxes' allgathers
+    faces_sent: int = 0  # to other ranks
+    face_bytes_sent: int = 0
+    faces_received: int = 0  # from other ranks
+    face_bytes_received: int = 0
+    faces: int = 0  # held after the last search (this rank's and received)
+    gathered: int = 0
 
 
 @dataclass
@@ -185,6 +207,8 @@ class ContactInteraction:
         self._centroids = np.zeros((0, gdim))  # their reference centroids (ties in pairing)
         # (n_candidates, fdim) last projection points: the next pairing's starts
         self._xi = np.zeros((0, 0 if self.rigid else master.face.fdim))
+        #: the search's communication so far, this rank
+        self.exchange = Exchange()
         self._gather: Optional[NodeValues] = None
         self._slave_gather: Optional[NodeValues] = None
         self._trial: Optional[FrictionState] = None
@@ -214,6 +238,15 @@ class ContactInteraction:
                     else np.all((hi >= b[0]) & (lo <= b[1]), axis=1))
             outgoing.append((m.nodes[keep], m.X[keep], m.ids[keep]))
         incoming = self.comm.alltoall(outgoing)
+        ex, me = self.exchange, self.comm.rank
+        ex.searches += 1
+        ex.box_bytes += sum(0 if b is None else b.nbytes for b in boxes)
+        for k, (out, into) in enumerate(zip(outgoing, incoming)):
+            if k != me:
+                ex.faces_sent += len(out[2])
+                ex.face_bytes_sent += sum(a.nbytes for a in out)
+                ex.faces_received += len(into[2])
+                ex.face_bytes_received += sum(a.nbytes for a in into)
         nodes = np.concatenate([f[0] for f in incoming]).reshape(-1, m.face.n_nodes)
         X = np.concatenate([f[1] for f in incoming]).reshape(-1, m.face.n_nodes, self.gdim)
         self._faces = (nodes, X)
@@ -254,6 +287,8 @@ class ContactInteraction:
         self._exchange_faces(u_faces_local, x_s)
         self._gather = NodeValues(u, self._faces[0].ravel(), self.gdim)
         face_nodes, X_f = self._faces
+        self.exchange.faces = len(face_nodes)
+        self.exchange.gathered = self._slave_gather.remote + self._gather.remote
         x_f = X_f + self._gather(u).reshape(X_f.shape)
         slave, face = _nearest_faces(x_s, x_f, 16 if self.gdim == 3 else 6)
         nodes = np.concatenate([face_nodes[face], self.slaves.nodes[slave, None]], axis=1)

@@ -21,7 +21,7 @@ leaves a linear residual above :data:`SINGULAR` of the right-hand side means a s
 Jacobian (a body that only the contact held, and the contact opened): the solve fails
 with that reason (:attr:`LinearSolver.failure`), and Newton with it.
 Where the Jacobian splits into a constant bulk stiffness ``K`` and a contact tangent ``C``
-(:meth:`~dolfinx_friction.fem.block_problem.BlockProblem.split`: linear bodies, serial), the solve
+(:meth:`~dolfinx_friction.fem.block_problem.BlockProblem.split`: linear bodies), the solve
 can keep ``K``'s factorisation for the whole run instead (:class:`Condensed`): with ``A``
 the dofs where ``C`` is not zero, ``G = (K^-1)_AA`` (one back-solve per dof the first time
 it is active), ``x = K^-1 (b - P_A w)``, ``(I + C_AA G) w = C_AA (K^-1 b)_A`` (Woodbury's
@@ -37,7 +37,9 @@ columns of ``G`` would not pay back there), known once that path solved (with a
 factorisation it keeps: once that preconditioned a solve); ``K`` is factorised only if
 ``G``'s columns, at that path's back-solve flops, could pay (on a 35k-dof 3D block they
 cannot: 0.67 s of factorisation was spent for nothing).
-Serial only: under MPI the path above.
+Under MPI the same: ``K`` is factorised by distributed MUMPS, ``G``'s columns come from
+back-solves with distributed right-hand sides, and ``G``, ``C_AA`` and the dense solves are
+kept on every rank (redundantly, :class:`Condensed`); every decision uses global counts.
 A factorisation given the constrained rows (Newton gives them: identity rows with zero
 right-hand side) solves on the free rows only (:mod:`~dolfinx_friction.nls.free_rows`):
 MUMPS would otherwise order the held dofs with their neighbours (the one-layer ironing
@@ -322,17 +324,24 @@ class Condensed:
 
     ``G``, the entries of ``K^-1`` among the contact surfaces' dofs, is filled column by
     column as dofs become active and kept while ``K`` (the same matrix object) does; the
-    whole columns ``K^-1 P`` too while they take no more entries than ``K``'s factors
-    (then ``K^-1 (r - P_A w) = K^-1 r - (K^-1 P_A) w`` needs one back-solve instead of two).
+    whole columns ``K^-1 P`` too (this rank's rows) while they take no more entries than
+    ``K``'s factors (then ``K^-1 (r - P_A w) = K^-1 r - (K^-1 P_A) w`` needs one back-solve
+    instead of two).  Under MPI ``K`` is factorised by distributed MUMPS and ``G``'s columns
+    come from back-solves with distributed right-hand sides; ``G``, ``C_AA`` (gathered from
+    every rank's elements) and the dense solves with ``I + C_AA G`` are the same on every
+    rank, done redundantly: each rank needs all of ``w`` for its rows of ``P_A w``, and a
+    solve on one rank would add a broadcast to every preconditioner application while the
+    others wait.  Every decision is taken on the same global counts on every rank.
     """
 
     def __init__(self, comm, prefix: str, symmetric: bool = False):
+        self.comm = comm.tompi4py()
         self.bulk = PETSc.KSP().create(comm)
         self.bulk.setOptionsPrefix(prefix + "bulk_")
         self.bulk.setType("preonly")
         pc = self.bulk.getPC()
-        self.symmetric = symmetric
-        pc.setType("cholesky" if symmetric else "lu")
+        self.symmetric = symmetric and self.comm.size == 1  # LDL^T on one rank (module doc)
+        pc.setType("cholesky" if self.symmetric else "lu")
         pc.setFactorSolverType("mumps")
         self.bulk.setFromOptions()
         self.outer = PETSc.KSP().create(comm)
@@ -354,6 +363,9 @@ class Condensed:
         self._G = np.zeros((0, 0))
         self._known = np.zeros(0, bool)  # per surface dof: its column of G is computed
         self._column = np.zeros(0, np.int64)  # per surface dof: its column in _G
+        self._active = np.zeros(0, np.int64)  # the dofs where C is not zero (global)
+        self._gather: Optional[PETSc.Scatter] = None  # a vector's active entries, to all
+        self._v_A: Optional[PETSc.Vec] = None  # (n_active,) on every rank
         self.columns = 0  # back-solves spent on G
         self.solves = 0  # solves done, each instead of a factorisation
         self._spent = 0.0  # flops spent on them (estimated)
@@ -385,22 +397,28 @@ class Condensed:
 
     def _add_columns(self, where: np.ndarray) -> None:
         """Columns of ``K^-1`` of the surface dofs at ``where``, restricted to the surface
-        dofs, appended to ``G``."""
+        dofs, appended to ``G`` (collective: distributed back-solves, rows gathered)."""
         F = self.bulk.getPC().getFactorMatrix()
         n = self._K.getSize()[0]
+        start, end = self._K.getOwnershipRange()
+        owned = (self._dofs >= start) & (self._dofs < end)
+        rows = self._dofs[owned] - start  # this rank's surface dofs, local
         new = []
-        for start in range(0, len(where), COLUMNS_PER_SOLVE):
-            chunk = where[start:start + COLUMNS_PER_SOLVE]
-            rhs = np.zeros((n, len(chunk)), order="F")
-            rhs[self._dofs[chunk], np.arange(len(chunk))] = 1.0
-            B = PETSc.Mat().createDense((n, len(chunk)), array=rhs, comm=PETSc.COMM_SELF)
-            X = PETSc.Mat().createDense((n, len(chunk)), comm=PETSc.COMM_SELF)
+        for first in range(0, len(where), COLUMNS_PER_SOLVE):
+            chunk = where[first:first + COLUMNS_PER_SOLVE]
+            rhs = np.zeros((end - start, len(chunk)), order="F")
+            mine = owned[chunk]
+            rhs[self._dofs[chunk][mine] - start, np.flatnonzero(mine)] = 1.0
+            sizes = ((end - start, n), (None, len(chunk)))
+            B = PETSc.Mat().createDense(sizes, array=rhs, comm=self._K.getComm())
+            X = PETSc.Mat().createDense(sizes, comm=self._K.getComm())
             X.setUp()
             F.matSolve(B, X)
-            full = X.getDenseArray()
-            new.append(full[self._dofs].copy())
+            part = X.getDenseArray()
+            # the ranks' rows in rank order: the sorted surface dofs
+            new.append(np.vstack(self.comm.allgather(part[rows])))
             if self._Z is not None:
-                self._Z.append(full.copy())
+                self._Z.append(part.copy())
             B.destroy()
             X.destroy()
         self._column[where] = self._G.shape[1] + np.arange(len(where))
@@ -410,19 +428,29 @@ class Condensed:
         if self._Z is not None and n * self._G.shape[1] > self._entries:
             self._Z = None  # no more memory for whole columns than the factors take
 
+    def _active_entries(self, split) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The contact entries of every rank (collective): the sorted global ``active`` dofs
+        and all ranks' ``rows``, ``cols``, ``values`` in rank order."""
+        entries = [(split.rows, split.cols, split.values)]
+        if self.comm.size > 1:
+            entries = self.comm.allgather(entries[0])
+        rows, cols, values = (np.concatenate(e) for e in zip(*entries))
+        return np.unique(np.concatenate([rows, cols])), rows, cols, values
+
     def solve(self, split, b: PETSc.Vec, x: PETSc.Vec, replaced: float,
               solve_flops: float) -> bool:
         """Solve with the kept bulk factorisation; False (``x`` undefined) when this path
-        does not pay here or did not converge: the caller solves another way.  ``replaced``:
-        the flops of a solve by the other path, ``solve_flops``: of a back-solve there
-        (``K``'s estimate before it is factorised)."""
-        coupled = np.zeros(split.bulk.getSize()[0], bool)
-        coupled[split.rows] = coupled[split.cols] = True
-        active = np.flatnonzero(coupled)
+        does not pay here or did not converge: the caller solves another way (collective:
+        the same answer on every rank).  ``replaced``: the flops of a solve by the other
+        path, ``solve_flops``: of a back-solve there (``K``'s estimate before it is
+        factorised); both MUMPS's global counts."""
+        active, rows, cols, values = self._active_entries(split)
 
         def cost(columns: int, per_column: float) -> float:
-            """Flops of this solve: new columns of G, back-solves, the dense solves."""
-            return (columns + 8) * per_column + 2.0 / 3.0 * len(active) ** 3
+            """Flops of this solve on all ranks: new columns of G, back-solves, the dense
+            solves (on every rank)."""
+            return ((columns + 8) * per_column
+                    + self.comm.size * 2.0 / 3.0 * len(active) ** 3)
 
         budget = replaced * (self.solves + 1 + INVESTMENT) - self._spent
         if split.bulk is not self._K:
@@ -445,15 +473,13 @@ class Condensed:
         if len(new):
             self._add_columns(new)
         n = len(active)
-        position = np.cumsum(coupled) - 1  # of each active dof among them
-        C = np.bincount(position[split.rows] * n + position[split.cols], weights=split.values,
-                        minlength=n * n).reshape(n, n)
-        cols = self._column[where]
-        self._active, self._C = active, C
-        self._cols = cols
+        C = np.bincount(np.searchsorted(active, rows) * n + np.searchsorted(active, cols),
+                        weights=values, minlength=n * n).reshape(n, n)
+        self._set_active(active)
+        self._C, self._cols = C, self._column[where]
         if self._Z is not None and len(self._Z) > 1:
             self._Z = [np.hstack(self._Z)]
-        self._M = np.eye(n) + C @ self._G[np.ix_(where, cols)]
+        self._M = np.eye(n) + C @ self._G[np.ix_(where, self._cols)]
         if self._J is None:
             self._J = PETSc.Mat().createPython(self._K.getSizes(), self, comm=self._K.getComm())
             self._J.setUp()
@@ -467,24 +493,48 @@ class Condensed:
         self.solves += ok
         return ok
 
+    def _set_active(self, active: np.ndarray) -> None:
+        """The active dofs (global, sorted): this rank's among them, and the scatter that
+        gives every rank a vector's values at all of them (kept while they are the same)."""
+        if self._gather is not None and np.array_equal(active, self._active):
+            return
+        self._active = active
+        start, end = self._K.getOwnershipRange()
+        owned = (active >= start) & (active < end)
+        self._owned, self._local = owned, active[owned] - start
+        if self._gather is not None:
+            self._gather.destroy()
+            self._v_A.destroy()
+        self._v_A = PETSc.Vec().createSeq(len(active), comm=PETSc.COMM_SELF)
+        index = PETSc.IS().createGeneral(active.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        self._gather = PETSc.Scatter().create(self._y, index, self._v_A, None)
+        index.destroy()
+
+    def _at_active(self, v: PETSc.Vec) -> np.ndarray:
+        """(n_active,) the values of the distributed ``v`` at the active dofs, on every
+        rank (collective)."""
+        self._gather.scatter(v, self._v_A, addv=PETSc.InsertMode.INSERT,
+                             mode=PETSc.ScatterMode.FORWARD)
+        return self._v_A.getArray(readonly=True)
+
     def mult(self, mat, v: PETSc.Vec, y: PETSc.Vec) -> None:
         """``y = (K + C) v``: the Jacobian, without assembling it."""
         self._K.mult(v, y)
         values = y.getArray().copy()
-        values[self._active] += self._C @ v.getArray(readonly=True)[self._active]
+        values[self._local] += (self._C @ self._at_active(v))[self._owned]
         y.setArray(values)
 
     def apply(self, pc, r: PETSc.Vec, z: PETSc.Vec) -> None:
         """``z = (K + C)^-1 r`` (up to round-off): the preconditioner."""
         y = self._y
         self.bulk.solve(r, y)
-        w = np.linalg.solve(self._M, self._C @ y.getArray(readonly=True)[self._active])
+        w = np.linalg.solve(self._M, self._C @ self._at_active(y))
         if self._Z:  # K^-1 (r - P_A w) = y - (K^-1 P_A) w, from the kept columns
             w_all = np.zeros(self._Z[0].shape[1])
             w_all[self._cols] = w
             z.setArray(y.getArray(readonly=True) - self._Z[0] @ w_all)
             return
         values = r.getArray(readonly=True).copy()
-        values[self._active] -= w
+        values[self._local] -= w[self._owned]
         y.setArray(values)
         self.bulk.solve(y, z)

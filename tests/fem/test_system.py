@@ -218,25 +218,44 @@ def _solve(scene, comm=MPI.COMM_WORLD, **kwargs):
 
 @pytest.mark.parametrize("mu", [0.0, 0.3])
 def test_condensed_solve_gives_the_direct_answer(shared_dir, mu):
-    """Linear bodies, serial: the bulk factorisation kept for the run with the contact
-    condensed (linear.Condensed) reaches the reactions of a factorisation per iteration to
-    round-off, in the same Newton iterations; under MPI the run takes the other path.
-    A deep foundation: the contact surface is small against the bulk, where it pays."""
+    """Linear bodies: the bulk factorisation kept for the run with the contact condensed
+    (linear.Condensed) reaches the reactions of a factorisation per iteration to round-off,
+    in the same Newton iterations, on every rank count (under MPI: distributed MUMPS, the
+    dense part on every rank), and the serial run's reactions.  A deep foundation: the
+    contact surface is small against the bulk, where it pays."""
     mesh = meshes.two_boxes(shared_dir / "deep_boxes.msh", n_foundation=(5, 5, 10))
     scene = _boxes_scene(mesh, mu=mu)
     condensed, solver = _solve(scene)
     direct, plain = _solve(scene, reuse_factorisation=False)
     assert plain.linear.condensed_solves == 0
-    if solver.comm.size == 1:
-        assert solver.linear.condensed_solves > 0
-        assert solver.linear.factorisations == 1  # the first solve's, which prices the path
-    else:
-        assert solver.linear.condensed_solves == 0
-    for a, b in zip(condensed, direct):
-        for group in b.reactions:
-            R = np.abs(b.reactions[group]).max()  # measured: 1e-14 R
-            np.testing.assert_allclose(a.reactions[group], b.reactions[group], atol=1e-10 * R)
-    assert [i.iterations for i in condensed] == [i.iterations for i in direct]
+    assert solver.linear.condensed_solves > 0
+    assert solver.linear.factorisations == 1  # the first solve's, which prices the path
+    assert solver.summary.linear_solves["condensed_solves"] == solver.linear.condensed_solves
+    serial = _solve(scene, MPI.COMM_SELF)[0] if solver.comm.size > 1 else direct
+    for reference in (direct, serial):
+        for a, b in zip(condensed, reference):
+            for group in b.reactions:
+                R = np.abs(b.reactions[group]).max()  # measured: 1e-14 R
+                np.testing.assert_allclose(a.reactions[group], b.reactions[group],
+                                           atol=1e-10 * R)
+        assert [i.iterations for i in condensed] == [i.iterations for i in reference]
+
+
+def test_exchange_counts_what_the_searches_sent(shared_dir):
+    """``NodeToSurface.exchange()``: per rank, the boxes allgathered (48 B each in 3D) and
+    the master faces sent point to point (136 B a Q4 face); what the ranks sent is what they
+    received; nothing goes between ranks serially."""
+    mesh = meshes.two_boxes(shared_dir / "boxes.msh")
+    _, solver = _solve(_boxes_scene(mesh, mu=0.3))
+    comm = solver.comm
+    ex = solver.system.contacts[0].exchange()
+    assert ex.searches > 0 and comm.allreduce(ex.faces) > 0
+    assert 0 < ex.box_bytes <= 48 * comm.size * ex.searches
+    sent, received = comm.allreduce(ex.face_bytes_sent), comm.allreduce(ex.face_bytes_received)
+    assert sent == received == 136 * comm.allreduce(ex.faces_sent)
+    assert comm.allreduce(ex.faces_received) == comm.allreduce(ex.faces_sent)
+    if comm.size == 1:
+        assert sent == 0 and ex.gathered == 0
 
 
 @pytest.mark.parametrize("mu", [0.0, 0.3])
