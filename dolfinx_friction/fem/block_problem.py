@@ -219,9 +219,11 @@ class BlockProblem:
     # ------------------------------------------------------------ constraints
     def prescribe(self, rows: np.ndarray, values: np.ndarray) -> None:
         """Constrain owned rows (local indices of :attr:`x`) to values, besides the
-        dolfinx bcs; :meth:`apply_bcs` writes them into :attr:`x`."""
+        dolfinx bcs; :meth:`apply_bcs` writes them into :attr:`x`.  Collective: where the
+        rows changed on any rank, :attr:`constrained_rows` is a new array on every rank
+        (the caches keyed on it are collective)."""
         rows = np.asarray(rows, dtype=np.int64)
-        if not np.array_equal(rows, self._prescribed_rows):
+        if self.comm.allreduce(not np.array_equal(rows, self._prescribed_rows), op=MPI.LOR):
             self._prescribed_rows = rows
             self._constrained = np.union1d(self._bc_rows, rows)
         self._prescribed_values = np.asarray(values, dtype=float)
