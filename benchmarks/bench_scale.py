@@ -35,43 +35,13 @@ import numpy as np
 import _bench as B  # noqa: I001
 
 import bench_cost as C
+from dolfinx_friction.reference.cases import block_on_foundation_toml
 
 FULL, QUICK = (6, 9, 12, 16, 21, 29), (3, 5)
 MU = 0.3
 
-SCENE = """title = "block on a foundation, n = {n}"
-[mesh]
-file = "{mesh}"
-[[body]]
-name = "block"
-E = 1000.0
-nu = 0.3
-[[body]]
-name = "foundation"
-E = 1000.0
-nu = 0.3
-[[contact]]
-slave = "block_bottom"
-master = "foundation_top"
-mu = {mu}
-K = "calculix"
-stick_slope = "calculix"
-[[step]]
-name = "press"
-  [[step.bc]]
-  on = "foundation_bottom"
-  u = [0.0, 0.0, 0.0]
-  [[step.bc]]
-  on = "block_top"
-  u = [0.0, 0.0, -{press}]
-[[step]]
-name = "slide"
-increments = 2
-  [[step.bc]]
-  on = "block_top"
-  u = [{slide}, 0.0, -{press}]
-[output]
-fields = false
+CONTACT = 'K = "calculix"\nstick_slope = "calculix"'
+OUTPUT = """fields = false
 contact_table = true
 reactions = ["block_top", "foundation_bottom"]
 [solver]
@@ -81,8 +51,9 @@ linear = "auto"
 
 def scene_file(n: int) -> Path:
     path = B.work_dir("scale") / f"boxes_n{n}.toml"
-    path.write_text(SCENE.format(n=n, mesh=C.two_boxes_mesh(n), mu=MU, press=C.PRESS,
-                                 slide=C.SLIDE))
+    path.write_text(block_on_foundation_toml(
+        str(C.two_boxes_mesh(n)), title=f"block on a foundation, n = {n}", mu=MU,
+        press=-C.PRESS, slide=C.SLIDE, contact=CONTACT, output=OUTPUT))
     return path
 
 

@@ -48,43 +48,12 @@ from pathlib import Path
 import _bench as B  # noqa: I001
 
 import bench_cost as C
+from dolfinx_friction.reference.cases import block_on_foundation_toml
 
 SCENES = ("boxes", "sliding_block")
-BOXES_TOML = """title = "bench_small: block on a foundation, n = 2, 1 + 10 increments"
-[mesh]
-file = "{mesh}"
-[[body]]
-name = "block"
-E = {E}
-nu = {nu}
-[[body]]
-name = "foundation"
-E = {E}
-nu = {nu}
-[[contact]]
-slave = "block_bottom"
-master = "foundation_top"
-mu = {mu}
-K = "calculix"
-stick_slope = "calculix"
-[[step]]
-name = "press"
-increments = 1
-  [[step.bc]]
-  on = "foundation_bottom"
-  u = [0.0, 0.0, 0.0]
-  [[step.bc]]
-  on = "block_top"
-  u = [0.0, 0.0, {press}]
-[[step]]
-name = "slide"
-increments = 10
-  [[step.bc]]
-  on = "block_top"
-  u = [{slide}, 0.0, {press}]
-[output]
-reactions = ["block_top", "foundation_bottom"]
-"""
+BOXES_TITLE = "bench_small: block on a foundation, n = 2, 1 + 10 increments"
+BOXES_CONTACT = 'K = "calculix"\nstick_slope = "calculix"'
+BOXES_OUTPUT = 'reactions = ["block_top", "foundation_bottom"]'
 
 
 def prepare(name: str) -> Path:
@@ -96,8 +65,9 @@ def prepare(name: str) -> Path:
     toml = d / f"{name}.toml"
     if name == "boxes":
         mesh = C.two_boxes_mesh(2)
-        toml.write_text(BOXES_TOML.format(mesh=mesh, E=C.E, nu=C.NU, mu=C.MU, press=-C.PRESS,
-                                          slide=C.SLIDE))
+        toml.write_text(block_on_foundation_toml(
+            str(mesh), title=BOXES_TITLE, E=C.E, nu=C.NU, mu=C.MU, press=-C.PRESS, slide=C.SLIDE,
+            slide_increments=10, contact=BOXES_CONTACT, output=BOXES_OUTPUT))
     else:
         for suffix in (".toml", ".msh"):
             shutil.copy(B.DEMOS / f"{name}{suffix}", d / f"{name}{suffix}")

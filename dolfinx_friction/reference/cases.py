@@ -1,7 +1,8 @@
 """The CalculiX comparison cases at finite strain, shared by the verification tests
 (``tests/verification/test_calculix_nlgeom.py``, where their measured differences are) and
 the benchmarks (``benchmarks/bench_ccx.py``, ``bench_ccx_nlgeom.py``): the scenes on the
-meshes of :mod:`dolfinx_friction.reference.meshes`, and the ironing's summary figures.
+meshes of :mod:`dolfinx_friction.reference.meshes`, the ironing's summary figures, and the
+text of a block-on-a-foundation scene file for the command line's tests and benchmarks.
 Dimensionless units."""
 from __future__ import annotations
 
@@ -9,7 +10,8 @@ import numpy as np
 
 from dolfinx_friction.scene.model import BC, Body, ContactPair, Output, Scene, Step
 
-__all__ = ["E", "NU", "press_shear_scene", "ironing_scene", "ironing_figures"]
+__all__ = ["E", "NU", "press_shear_scene", "ironing_scene", "ironing_figures",
+           "block_on_foundation_toml"]
 
 #: The block's Young's modulus and Poisson's ratio in the press and shear.
 E, NU = 1000.0, 0.3
@@ -69,3 +71,50 @@ def ironing_figures(reactions: dict, last: int = 4) -> dict:
     fx = float(np.mean([reactions[k][0] for k in drag]))
     fy = float(np.mean([abs(reactions[k][1]) for k in drag]))
     return {"press": abs(float(reactions[press][1])), "slide": fx, "ratio": fx / fy}
+
+
+def block_on_foundation_toml(mesh: str, *, title: str = "block slid on a foundation",
+                             E: float = 1000.0, nu: float = 0.3, mu: float = 0.3,
+                             press: float = -0.01, slide: float = 0.2,
+                             slide_increments: int = 2, contact: str = "",
+                             output: str = "fields = true") -> str:
+    """The text of a scene file: the block of the mesh ``mesh`` (groups ``block``,
+    ``foundation``, ``block_bottom``, ``block_top``, ``foundation_top``,
+    ``foundation_bottom``, as :func:`~dolfinx_friction.reference.meshes.blocks_on_foundation`
+    and the benchmarks' two boxes name them) pressed by ``press`` along z in one increment,
+    then its top slid by ``slide`` along x in ``slide_increments``; ``contact`` adds lines to
+    the ``[[contact]]`` table, ``output`` is the ``[output]`` table's body.  Lengths in the
+    mesh's unit, E in its stress unit."""
+    return f'''title = "{title}"
+[mesh]
+file = "{mesh}"
+[[body]]
+name = "block"
+E = {E}
+nu = {nu}
+[[body]]
+name = "foundation"
+E = {E}
+nu = {nu}
+[[contact]]
+slave = "block_bottom"
+master = "foundation_top"
+mu = {mu}
+{contact}
+[[step]]
+name = "press"
+  [[step.bc]]
+  on = "foundation_bottom"
+  u = [0.0, 0.0, 0.0]
+  [[step.bc]]
+  on = "block_top"
+  u = [0.0, 0.0, {press}]
+[[step]]
+name = "slide"
+increments = {slide_increments}
+  [[step.bc]]
+  on = "block_top"
+  u = [{slide}, 0.0, {press}]
+[output]
+{output}
+'''

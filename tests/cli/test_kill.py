@@ -46,6 +46,7 @@ from mpi4py import MPI
 
 from dolfinx_friction import _compat as compat
 from dolfinx_friction.reference import meshes
+from dolfinx_friction.reference.cases import block_on_foundation_toml
 from tests.cli.test_outputs import series_grids
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
@@ -54,39 +55,8 @@ pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
 ROOT = Path(__file__).resolve().parents[2]
 BODIES = ("block", "foundation")
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
-SCENE = """\
-title = "many increments, killed on the way"
-[mesh]
-file = "two.msh"
-[[body]]
-name = "block"
-E = 1000.0
-nu = 0.3
-[[body]]
-name = "foundation"
-E = 1000.0
-nu = 0.3
-[[contact]]
-slave = "block_bottom"
-master = "foundation_top"
-mu = 0.3
-[[step]]
-name = "press"
-  [[step.bc]]
-  on = "foundation_bottom"
-  u = [0.0, 0.0, 0.0]
-  [[step.bc]]
-  on = "block_top"
-  u = [0.0, 0.0, -0.01]
-[[step]]
-name = "slide"
-increments = 40
-  [[step.bc]]
-  on = "block_top"
-  u = [0.2, 0.0, -0.01]
-[output]
-fields = true
-"""
+SCENE = block_on_foundation_toml("two.msh", title="many increments, killed on the way",
+                                 slide_increments=40)
 
 
 def _env() -> dict[str, str]:

@@ -32,6 +32,7 @@ from mpi4py import MPI
 import dolfinx_friction
 from dolfinx_friction.contact.laws import Linear
 from dolfinx_friction.reference import meshes
+from dolfinx_friction.reference.cases import block_on_foundation_toml
 from tests.cli.test_cli import TIMEOUT, cli, cli_env, mpirun_cli, read_csv
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
@@ -42,39 +43,7 @@ BODIES = ("block", "foundation")
 FIELDS = {"displacement", "contact_pressure", "tangential_traction", "slip", "status",
           "cauchy_stress", "von_mises"}
 SLIDE, PRESS = 0.2, -0.01  # the block's top: pressed by 0.01, then slid 0.2 along x
-SCENE = f"""\
-title = "block slid on a foundation"
-[mesh]
-file = "two.msh"
-[[body]]
-name = "block"
-E = 1000.0
-nu = 0.3
-[[body]]
-name = "foundation"
-E = 1000.0
-nu = 0.3
-[[contact]]
-slave = "block_bottom"
-master = "foundation_top"
-mu = 0.3
-[[step]]
-name = "press"
-  [[step.bc]]
-  on = "foundation_bottom"
-  u = [0.0, 0.0, 0.0]
-  [[step.bc]]
-  on = "block_top"
-  u = [0.0, 0.0, {PRESS}]
-[[step]]
-name = "slide"
-increments = 2
-  [[step.bc]]
-  on = "block_top"
-  u = [{SLIDE}, 0.0, {PRESS}]
-[output]
-fields = true
-"""
+SCENE = block_on_foundation_toml("two.msh", press=PRESS, slide=SLIDE)
 OVERRIDES = ("--set", "contact.0.mu=0.2", "--set", "step.1.increments=3")
 
 
