@@ -123,45 +123,13 @@ def children_cpu() -> float:
 
 
 # ----------------------------------------------------------------------------- runs
-class _Stop(Exception):
-    pass
-
-
-def _run_first(scene, comm, max_increments: int, **kwargs):
-    """Like ``api.run(write=False)``, but stop after ``max_increments`` converged increments."""
-    from dolfinx_friction.scene.runner import RunResult
-    from dolfinx_friction.scene.build import ContactProblem
-    from dolfinx_friction.scene.driver import Solver
-    start, cpu = time.perf_counter(), time.process_time()
-    problem = ContactProblem(scene, comm)
-    solver = Solver(problem, petsc_options=kwargs.get("petsc_options"),
-                    reuse_factorisation=kwargs.get("reuse_factorisation"))
-    solver.timers.add("setup", time.perf_counter() - start, time.process_time() - cpu)
-    increments = []
-
-    def record(inc):
-        increments.append(inc)
-        if len(increments) >= max_increments:
-            raise _Stop
-
-    try:
-        summary = solver.run(record)
-    except _Stop:
-        summary = solver.summary
-    result = RunResult(problem, summary, increments, None)
-    result.solver = solver  # for benchmarks that inspect the matrix or the factorisation
-    return result
-
-
-def timed_run(scene, comm=None, max_increments: int | None = None, keep_solver: bool = False,
-              **kwargs):
+def timed_run(scene, comm=None, max_increments: int | None = None, **kwargs):
     """Run ``scene`` in memory; return ``(RunResult, numbers)``.
 
     ``numbers``: dofs, wall and cpu seconds of the whole run, Newton iterations,
     cutbacks, iterations per increment, phase seconds (``phases``: CPU, ``phases_wall``:
     wall clock; the slowest rank's), load average, peak RSS.
-    ``max_increments``: stop after that many converged increments; ``keep_solver``: the
-    result also has ``.solver`` (the :class:`~dolfinx_friction.scene.driver.Solver`).
+    ``max_increments``: stop after that many converged increments.
     """
     from mpi4py import MPI
 
@@ -171,10 +139,7 @@ def timed_run(scene, comm=None, max_increments: int | None = None, keep_solver: 
     load0 = load_average()
     comm.barrier()
     w0, c0 = time.perf_counter(), time.process_time()
-    if max_increments or keep_solver:
-        result = _run_first(scene, comm, max_increments or 10 ** 9, **kwargs)
-    else:
-        result = run(scene, write=False, comm=comm, **kwargs)
+    result = run(scene, write=False, comm=comm, max_increments=max_increments, **kwargs)
     comm.barrier()
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     s = result.summary

@@ -52,6 +52,10 @@ class Increment:
     tolerance: float  # the residual norm the convergence test accepts; residual <= it [force]
 
 
+class _Enough(Exception):
+    """Raised past the last increment a run was asked for (``max_increments``)."""
+
+
 @dataclass
 class RunSummary:
     increments: int = 0
@@ -185,12 +189,15 @@ class Solver:
 
     # -------------------------------------------------------------- run
     def run(self, on_increment: Optional[Callable[[Increment], None]] = None,
-            control: Optional[RunControl] = None) -> RunSummary:
+            control: Optional[RunControl] = None,
+            max_increments: Optional[int] = None) -> RunSummary:
         """Solve every step; ``on_increment`` sees each converged increment.  ``control``
         (:mod:`~dolfinx_friction.scene.control`) is told the increment worked on and asked
-        whether to stop at every residual evaluation.  Raises :class:`ConvergenceError`."""
+        whether to stop at every residual evaluation.  ``max_increments``: stop after that
+        many converged increments (the summary is then not ``converged``).  Raises
+        :class:`ConvergenceError`."""
         if control is None:
-            return self._run(on_increment, None)
+            return self._run(on_increment, None, max_increments)
 
         # first in the guards: reached whatever the other guards find
         def guard() -> str:
@@ -198,14 +205,27 @@ class Solver:
             return ""
         self.system.guards.insert(0, guard)
         try:
-            return self._run(on_increment, control)
+            return self._run(on_increment, control, max_increments)
         finally:
             self.system.guards.remove(guard)
 
     def _run(self, on_increment: Optional[Callable[[Increment], None]],
-             control: Optional[RunControl]) -> RunSummary:
+             control: Optional[RunControl], max_increments: Optional[int]) -> RunSummary:
         summary = self.summary
         start = time.perf_counter()
+        try:
+            self._steps(on_increment, control, max_increments, start)
+            summary.converged = True
+        except _Enough:
+            pass
+        summary.wall = time.perf_counter() - start
+        summary.linear_solves = self._linear_solves()
+        return summary
+
+    def _steps(self, on_increment: Optional[Callable[[Increment], None]],
+               control: Optional[RunControl], max_increments: Optional[int],
+               start: float) -> None:
+        summary = self.summary
         for index, step in enumerate(self.problem.scene.steps):
             loading = self._step_loading(index)
             newton = self.newton
@@ -232,6 +252,8 @@ class Solver:
                 report = self._report(index, name, record, time.perf_counter() - start)
                 if on_increment is not None:
                     on_increment(report)
+                if max_increments is not None and summary.increments >= max_increments:
+                    raise _Enough
             try:
                 stepping.solve_steps(self.system, load, step.increments, newton,
                                      step.max_cutbacks, converged)
@@ -247,10 +269,6 @@ class Solver:
                 summary.linear_solves = self._linear_solves()
                 raise ConvergenceError(reason, exc.increment, exc.t, exc.residual, exc.reason,
                                        exc.records, exc.cutbacks, exc.iterations) from None
-        summary.converged = True
-        summary.wall = time.perf_counter() - start
-        summary.linear_solves = self._linear_solves()
-        return summary
 
     def _linear_solves(self) -> Optional[dict]:
         linear = self.linear

@@ -36,6 +36,8 @@ class RunResult:
     summary: RunSummary
     increments: list[Increment]
     directory: Optional[Path]
+    #: the solver that ran it (its Newton system, linear solver and timers), for inspection
+    solver: Optional[Solver] = None
 
 
 def peak_memory_mib() -> float:
@@ -66,7 +68,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         reuse_factorisation: Optional[bool] = None,
         progress: Optional[Callable[[Increment], None]] = None,
         control: Optional[RunControl] = None,
-        workspace: Optional[Workspace] = None) -> RunResult:
+        workspace: Optional[Workspace] = None,
+        max_increments: Optional[int] = None) -> RunResult:
     """Solve a scene (a :class:`Scene` or a scene file) and write its results.
 
     ``overrides`` (``KEY=VALUE`` as ``--set`` takes them) apply to a scene file only (a
@@ -78,7 +81,8 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     and may stop it at a checkpoint (:class:`~dolfinx_friction.errors.Interrupted`);
     ``workspace`` (:mod:`~dolfinx_friction.scene.workspace`) keeps the meshes, spaces and
     compiled forms for the next run given it, and gives this one what the last one kept
-    (the same results, bit for bit).
+    (the same results, bit for bit); ``max_increments`` stops the run after that many
+    converged increments (written as any; ``summary.converged`` stays False).
     Nothing is printed: warnings (a penalty too soft for the mesh, nodes that slid off
     their master) and notices go to the ``dolfinx_friction`` logger, from rank 0;
     ``petsc_options`` (without prefix) set the linear solver; ``reuse_factorisation``
@@ -150,7 +154,7 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
                 "peak_memory_mib": peak, "warnings": list(warnings.values())}
 
     try:
-        summary = solver.run(record, control)
+        summary = solver.run(record, control, max_increments)
     except ConvergenceError:
         solver.summary.wall = time.perf_counter() - start
         if writer is not None:
@@ -159,4 +163,4 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
     summary.wall = time.perf_counter() - start
     if writer is not None:
         writer.summary(summary, extra())
-    return RunResult(problem, summary, increments, directory if write else None)
+    return RunResult(problem, summary, increments, directory if write else None, solver)
