@@ -251,6 +251,22 @@ def run_worker(script: Path, args: list[str], ranks: int = 1, timeout: float = 3
     raise RuntimeError(f"worker {' '.join(cmd)} failed (exit {proc.returncode}):\n{tail}")
 
 
+def rank_series(script: Path, args_per_rank: dict[int, list[str]], line, repeat: int = 1,
+                save: str | None = None) -> dict[int, list[dict]]:
+    """Run ``script``'s worker once per rank count with that count's arguments, ``repeat``
+    rounds; the runs by rank count, each printed as ``line(ranks, run)`` and the whole
+    series saved to ``save`` (JSON) as each run finishes."""
+    runs: dict[int, list[dict]] = {}
+    for _ in range(repeat):
+        for ranks, args in args_per_rank.items():
+            run = run_worker(script, args, ranks=ranks, timeout=6 * 3600)
+            runs.setdefault(ranks, []).append(run)
+            print(line(ranks, run), flush=True)
+            if save:
+                Path(save).write_text(json.dumps(runs, indent=1))
+    return runs
+
+
 def emit(result: dict) -> None:
     """Print a worker's result (rank 0 only)."""
     from mpi4py import MPI

@@ -181,17 +181,15 @@ def main(argv=None) -> None:
     runs: dict[int, list[dict]] = {}
     for saved in args.load:
         runs.update({int(r): v for r, v in json.loads(Path(saved).read_text()).items()})
-    for _ in range(0 if args.load else args.repeat):
-        for r in (int(x) for x in args.ranks.split(",")):
-            run = B.run_worker(Path(__file__), [str(n), str(args.slide), args.solver], ranks=r,
-                               timeout=6 * 3600)
-            runs.setdefault(r, []).append(run)
-            print(f"{r} rank(s): dofs {run['dofs']} its {run['newton']} wall {run['wall']:.1f} s "
-                  f"cpu {run['cpu']:.1f} s phases(wall) "
-                  + " ".join(f"{k}={run['phases_wall'][k]:.2f}" for k in PHASES)
-                  + f" rss {run['rss_per_rank']} load {run['load']}", flush=True)
-            if args.json:
-                Path(args.json).write_text(json.dumps(runs, indent=1))
+    if not args.load:
+        runs = B.rank_series(
+            Path(__file__), {int(r): [str(n), str(args.slide), args.solver]
+                             for r in args.ranks.split(",")},
+            lambda r, run: f"{r} rank(s): dofs {run['dofs']} its {run['newton']} wall "
+                           f"{run['wall']:.1f} s cpu {run['cpu']:.1f} s phases(wall) "
+                           + " ".join(f"{k}={run['phases_wall'][k]:.2f}" for k in PHASES)
+                           + f" rss {run['rss_per_rank']} load {run['load']}",
+            args.repeat, args.json)
     figure = chart(runs, machine, n, args.solver)
     text = report(runs, machine, B.load_average(), args.quick, figure, n, args.slide,
                   args.solver)

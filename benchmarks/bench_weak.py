@@ -205,17 +205,13 @@ def main(argv=None) -> None:
         for r, n in sizes.items():
             C.two_boxes_mesh(n)  # built here, not by the ranks at once
             print(f"{r} rank(s): two_boxes n = {n}, {M.two_boxes_dofs(n):,} dofs", flush=True)
-        for _ in range(args.repeat):
-            for r, n in sizes.items():
-                run = B.run_worker(Path(__file__), [str(n), str(args.slide)], ranks=r,
-                                   timeout=6 * 3600)
-                runs.setdefault(r, []).append(run)
-                print(f"{r} rank(s): n {n} dofs {run['dofs']} its {run['newton']} wall "
-                      f"{run['wall']:.1f} s per it(wall) "
-                      + " ".join(f"{k}={per_iteration(run, k, 'wall'):.3f}" for k in PHASES)
-                      + f" exchange {run['exchange_per_rank']} load {run['load']}", flush=True)
-                if args.json:
-                    Path(args.json).write_text(json.dumps(runs, indent=1))
+        runs = B.rank_series(
+            Path(__file__), {r: [str(n), str(args.slide)] for r, n in sizes.items()},
+            lambda r, run: f"{r} rank(s): n {sizes[r]} dofs {run['dofs']} its {run['newton']} "
+                           f"wall {run['wall']:.1f} s per it(wall) "
+                           + " ".join(f"{k}={per_iteration(run, k, 'wall'):.3f}" for k in PHASES)
+                           + f" exchange {run['exchange_per_rank']} load {run['load']}",
+            args.repeat, args.json)
     figure = chart(runs, machine)
     text = report(runs, machine, B.load_average(), args.quick, figure, args.slide)
     print(text)
