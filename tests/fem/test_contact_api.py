@@ -218,40 +218,42 @@ def test_jacobian_on_a_turning_obstacle_matches_central_differences(case):
 def test_mortar_node_without_weights_hands_its_force_over_nodally():
     """A slave node whose faces met no master face at the increment's start (no weights)
     gives the master the nodal shares of its force: the residual of the plain
-    node-to-surface pair where no node has weights."""
+    node-to-surface pair.  The increment starts (``begin(x, start=away)``) with the block
+    moved 10 sideways, off the foundation, so no slave node has weights; it starting at the
+    pressed state itself, the weights act."""
     problem, contact, g = two_bodies(mu=0.0, distribution="nodal")
     press_and_slide(problem, contact, g, depth=0.02, slide=0.01, increments=(1, 1))
     mortar, contact_m, g_m = two_bodies(mu=0.0, distribution="mortar")
     g_m.value[:] = g.value
     x = mortar.x
     x.setArray(problem.x.getArray())
-    contact_m.begin(x)
-    contact_m.update(x)
-    assert MPI.COMM_WORLD.allreduce(int(contact_m._interaction.mortar.covered.sum())) > 0
-    def residual_at(problem, contact, x, b):  # the pairing frozen
-        contact.update(x, pairing=False)
+    away = x.copy()
+    values = away.getArray()
+    values[mortar.block_slice(0)][0::2] += 10.0
+    away.setArray(values)
+
+    def residual(problem, contact, start) -> PETSc.Vec:
+        """The residual at x of an increment started from ``start``."""
+        contact.begin(x, start=start)
+        contact.update(x)
+        b = x.duplicate()
         problem.residual(x, b)
-    b_with = x.duplicate()
-    residual_at(mortar, contact_m, x, b_with)
-    weights = contact_m._interaction.mortar  # as if no face had met the master at the start
-    weights.weights[:], weights.covered[:] = 0.0, False
-    contact_m._evaluated_at = None
-    b_nodal, b_without = x.duplicate(), x.duplicate()
-    contact.begin(problem.x)
-    residual_at(problem, contact, problem.x, b_nodal)
-    residual_at(mortar, contact_m, x, b_without)
+        return b
+    b_nodal = residual(problem, contact, away)
+    b_without, b_with = residual(mortar, contact_m, away), residual(mortar, contact_m, x)
     force = np.abs(contact.state().normal_force).max(initial=0.0)
     force = MPI.COMM_WORLD.allreduce(force, op=MPI.MAX)  # the scale of the contact rows
+    assert force > 0.0
     b_without.axpy(-1.0, b_nodal)
     assert b_without.norm(PETSc.NormType.INFINITY) < 1e-10 * force
     b_with.axpy(-1.0, b_nodal)
     assert b_with.norm(PETSc.NormType.INFINITY) > 1e-3 * force  # the weights do act
 
 
-def box_3d(x0, z0, width, height, n, cell):
+def box_3d(x0, z0, width, height, n, cell, comm=MPI.COMM_WORLD):
     """A box [x0, x0 + width]^2 x [z0, z0 + height] of n x n x max(n // 2, 1) cells with its
     bottom face tagged BOTTOM and top face TOP, and its linear-elastic residual."""
-    m = mesh.create_box(MPI.COMM_WORLD, [[x0, x0, z0], [x0 + width, x0 + width, z0 + height]],
+    m = mesh.create_box(comm, [[x0, x0, z0], [x0 + width, x0 + width, z0 + height]],
                         [n, n, max(n // 2, 1)], cell)
     facets = [mesh.locate_entities_boundary(m, 2, lambda x, z=z: np.isclose(x[2], z))
               for z in (z0, z0 + height)]
@@ -267,45 +269,44 @@ def box_3d(x0, z0, width, height, n, cell):
     return V, tags, u, F
 
 
-def test_mortar_weights_do_not_depend_on_the_partition():
-    """Each owned slave node's weights (integrated on the ranks that hold its faces, summed
-    on its owner) equal those of all slave faces against all master faces on one rank: a
-    hexahedral block on a tetrahedral foundation, on 1, 2 or 3 ranks."""
-    from dolfinx_friction.contact.mortar_weights import mortar_integrals
-    Vb, tb, ub, Fb = box_3d(0.25, 0.3, 0.5, 0.2, 4, mesh.CellType.hexahedron)
-    Vf, tf, uf, Ff = box_3d(0.0, 0.0, 1.0, 0.3, 5, mesh.CellType.tetrahedron)
+def _mortar_residual_by_node(comm) -> np.ndarray:
+    """A hexahedral block on a tetrahedral foundation, mortar distribution, the block's
+    nodes moved by a field of their coordinates into the foundation: every node's
+    coordinates and its residual, (n_nodes, 6) for both bodies, sorted by the coordinates."""
+    Vb, tb, ub, Fb = box_3d(0.25, 0.3, 0.5, 0.2, 4, mesh.CellType.hexahedron, comm)
+    Vf, tf, uf, Ff = box_3d(0.0, 0.0, 1.0, 0.3, 5, mesh.CellType.tetrahedron, comm)
     contact = NodeToSurface(Surface(Vb, tb, BOTTOM), Surface(Vf, tf, TOP), E=E,
                             distribution="mortar")
     problem = BlockProblem([Fb, Ff], [ub, uf], [], [contact])
+    ub.interpolate(lambda X: np.stack([0.01 * X[1], -0.02 * X[0], -0.004 - 0.01 * X[0] * X[1]]))
+    problem.gather()
     contact.begin(problem.x)
-    inter = contact._interaction
-    comm = MPI.COMM_WORLD
-    slaves, master = inter.slaves, inter.master
-    field = slaves.field
-    faces = comm.allgather((field.nodes[slaves.facet_nodes], field.X[slaves.facet_nodes]))
-    s_nodes = np.concatenate([f[0] for f in faces])
-    s_X = np.concatenate([f[1] for f in faces])
-    faces = comm.allgather((master.nodes, master.X))
-    m_nodes = np.concatenate([f[0] for f in faces])
-    m_X = np.concatenate([f[1] for f in faces])
-    s, m = np.divmod(np.arange(len(s_X) * len(m_X)), len(m_X))
-    integrals = mortar_integrals(slaves.face, s_X[s], master.face, m_X[m])
-    k = np.broadcast_to(s_nodes[s][:, :, None], integrals.shape).ravel()
-    j = np.broadcast_to(m_nodes[m][:, None, :], integrals.shape).ravel()
-    reference: dict = {}
-    for a, b, v in zip(k, j, integrals.ravel()):
-        if v:
-            reference.setdefault(a, {}).setdefault(b, 0.0)
-            reference[a][b] += v
-    weights = inter.mortar
-    assert weights.covered.all()
-    for node, row_nodes, row in zip(slaves.nodes, weights.nodes, weights.weights):
-        expected = reference[node]
-        total = sum(expected.values())
-        got = {b: w for b, w in zip(row_nodes, row) if b >= 0}
-        assert set(got) == set(expected)
-        for b, w in got.items():
-            assert w == pytest.approx(expected[b] / total, abs=1e-13)
+    contact.update(problem.x)
+    b = problem.x.duplicate()
+    problem.residual(problem.x, b)
+    assert comm.allreduce(int(np.count_nonzero(contact.state().normal_force))) > 10
+    rows = []
+    for k, V in enumerate((Vb, Vf)):
+        n = V.dofmap.index_map.size_local
+        rows.append(np.hstack([V.tabulate_dof_coordinates()[:n],
+                               b.getArray()[problem.block_slice(k)].reshape(n, 3)]))
+    rows = np.concatenate(comm.allgather(np.concatenate(rows)))
+    return rows[np.lexsort(np.round(rows[:, 2::-1].T, 9))]
+
+
+def test_mortar_residual_does_not_depend_on_the_partition():
+    """The mortar weights are integrated on the ranks that hold the slave faces and summed
+    on each node's owner: the residual of every node of both bodies on 1, 2 or 3 ranks
+    equals the one a single rank computes with the whole meshes (measured: 4.7e-15 on 2
+    ranks, 1.1e-14 on 3, of the largest entry; a 1 % error in the integrals sent to
+    another rank reads 6e-4)."""
+    whole = _mortar_residual_by_node(MPI.COMM_SELF)
+    parts = _mortar_residual_by_node(MPI.COMM_WORLD)
+    assert np.array_equal(np.round(parts[:, :3], 9), np.round(whole[:, :3], 9))
+    scale = np.abs(whole[:, 3:]).max()
+    assert scale > 0.0
+    print(f"\nworst residual difference {np.abs(parts[:, 3:] - whole[:, 3:]).max() / scale:.1e}")
+    assert np.abs(parts[:, 3:] - whole[:, 3:]).max() < 1e-12 * scale
 
 
 @pytest.mark.parametrize("mu", [0.0, 0.3])
