@@ -303,6 +303,22 @@ def pyplot():
     return plt
 
 
+def save_figure(fig, name: str, title: str, machine: dict | None = None,
+                fontsize: int = 10) -> Path:
+    """Title ``fig`` (with the machine's load, cores and commit when given), save it as
+    ``figures/name`` and close it; the path."""
+    if machine is not None:
+        title += (f" (load {machine['load'][0]:.1f} on {machine['nproc']} cores, "
+                  f"commit {machine['commit']})")
+    fig.suptitle(title, fontsize=fontsize)
+    fig.tight_layout()
+    path = FIGURES / name
+    fig.savefig(path)
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+    return path
+
+
 def pareto(points: list[tuple[float, float]]) -> list[int]:
     """Indices of the points (time, error) that no other point beats in both."""
     order = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))

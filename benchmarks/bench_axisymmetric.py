@@ -85,14 +85,9 @@ def chart(axi: list[dict], full: list[dict], pairs, machine: dict):
         ax.set_ylabel(f"relative error in {label} (elliptic fit) vs converged section")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
-    fig.suptitle("Hertz sphere, P1, K = 10 E/h (labels: n = 0.5/h; arrows: 3D run -> "
-                 "cheapest section at least as accurate; load "
-                 f"{machine['load'][0]:.1f} on {machine['nproc']} cores)", fontsize=9)
-    fig.tight_layout()
-    path = B.FIGURES / "hertz_axisymmetric_vs_3d.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return B.save_figure(fig, "hertz_axisymmetric_vs_3d.png",
+                         "Hertz sphere, P1, K = 10 E/h (labels: n = 0.5/h; arrows: 3D run -> "
+                         "cheapest section at least as accurate)", machine, fontsize=9)
 
 
 def report(axi, full, pairs, machine, load_end, figure) -> str:

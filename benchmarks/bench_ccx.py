@@ -314,13 +314,8 @@ def kinds_chart(rows, machine) -> Path:
         ax.set_ylabel("CPU seconds (whole analysis)")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
-    fig.suptitle(f"against CalculiX, one core each (load {machine['load'][0]:.1f} on "
-                 f"{machine['nproc']} cores, commit {machine['commit']})", fontsize=9)
-    fig.tight_layout()
-    path = B.FIGURES / "ccx_kinds.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return B.save_figure(fig, "ccx_kinds.png", "against CalculiX, one core each", machine,
+                         fontsize=9)
 
 
 def _ccx_cells(r: dict) -> dict:
@@ -418,13 +413,8 @@ def chart(rows, machine) -> Path:
     ax.set_ylabel("dolfinx_friction / CalculiX")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    fig.suptitle(f"two_boxes, mu = 0.3, 3 increments, one core each (load {machine['load'][0]:.1f} "
-                 f"on {machine['nproc']} cores)", fontsize=10)
-    fig.tight_layout()
-    path = B.FIGURES / "ccx_comparison.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return B.save_figure(fig, "ccx_comparison.png",
+                         "two_boxes, mu = 0.3, 3 increments, one core each", machine)
 
 
 def report(rows, machine, load_end, quick, figure) -> str:

@@ -207,13 +207,8 @@ def chart(rows: list[dict], machine: dict) -> Path:
     ax.set_title("contact overhead per iteration; reuse_factorisation", fontsize=10)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    fig.suptitle(f"two_boxes, mu = 0.3, serial; CPU time (load {machine['load'][0]:.1f} on "
-                 f"{machine['nproc']} cores)", fontsize=10)
-    fig.tight_layout()
-    path = B.FIGURES / "cost_per_iteration.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return B.save_figure(fig, "cost_per_iteration.png", "two_boxes, mu = 0.3, serial; CPU time",
+                         machine)
 
 
 def _match(rows, n, contact, solver, reuse=False):

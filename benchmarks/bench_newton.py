@@ -165,14 +165,9 @@ def chart(rows: list[dict], machine: dict) -> Path:
         ax.set_ylabel("r / r0")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle(f"Residual history, exact vs CalculiX tangent (tolerance 1e-9 r0, dotted; "
-                 "rings: iterations that changed the contact state); "
-                 f"load {machine['load'][0]:.1f} on {machine['nproc']} cores", fontsize=10)
-    fig.tight_layout()
-    path = B.FIGURES / "newton_residuals.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return B.save_figure(fig, "newton_residuals.png",
+                         "Residual history, exact vs CalculiX tangent (tolerance 1e-9 r0, dotted; "
+                         "rings: iterations that changed the contact state)", machine)
 
 
 def report(rows, machine, load_end, quick, figure, missing) -> str:

@@ -174,12 +174,8 @@ def chart(rows: list[dict], machine: dict) -> Path:
     axes[2].set(xlabel="dofs", ylabel="iterations", title="iterations")
     axes[0].legend()
     axes[2].legend()
-    fig.suptitle(f"press and slide of a block on a foundation, mu = {MU}, [solver] auto; "
-                 f"{machine['date']}, load {machine['load'][0]:.1f}")
-    fig.tight_layout()
-    path = B.FIGURES / "scale.png"
-    fig.savefig(path)
-    return path
+    return B.save_figure(fig, "scale.png", f"press and slide of a block on a foundation, "
+                         f"mu = {MU}, [solver] auto; {machine['date']}", machine, fontsize=12)
 
 
 def report(rows: list[dict], lines: list[str], machine: dict, load_end: float,

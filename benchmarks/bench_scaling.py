@@ -80,14 +80,9 @@ def chart(runs: dict, machine: dict, n: int, linear: str = "direct") -> Path:
         ax.legend(fontsize=8)
         ax.grid(alpha=0.3, axis="y")
     dofs = best(runs[ranks[0]], "wall")["dofs"]
-    fig.suptitle(f"strong scaling, two_boxes n = {n}, {dofs:,} dofs, mu = 0.3, "
-                 + ("MUMPS" if linear == "direct" else f"[solver] {linear}") + " "
-                 f"({machine['nproc']} cores, shared)", fontsize=10)
-    fig.tight_layout()
-    path = B.FIGURES / ("scaling.png" if linear == "direct" else f"scaling_{linear}.png")
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return B.save_figure(fig, "scaling.png" if linear == "direct" else f"scaling_{linear}.png",
+                         f"strong scaling, two_boxes n = {n}, {dofs:,} dofs, mu = 0.3, "
+                         + ("MUMPS" if linear == "direct" else f"[solver] {linear}"), machine)
 
 
 def phase(run: dict, key: str, clock: str) -> float:

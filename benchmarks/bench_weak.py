@@ -115,13 +115,8 @@ def chart(runs: dict, machine: dict) -> Path:
     ax.set_title("what the pairing exchanges, per rank", fontsize=10)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, axis="y")
-    fig.suptitle(f"weak scaling, two_boxes, mu = 0.3, GMRES + GAMG ({machine['nproc']} cores, "
-                 "shared)", fontsize=10)
-    fig.tight_layout()
-    path = B.FIGURES / "weak_scaling.png"
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return B.save_figure(fig, "weak_scaling.png", "weak scaling, two_boxes, mu = 0.3, GMRES + GAMG",
+                         machine)
 
 
 def report(runs: dict, machine: dict, load_end: float, quick: bool, figure: Path,
