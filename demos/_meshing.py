@@ -30,6 +30,15 @@ def gmsh_model(name: str) -> Iterator:
         gmsh.finalize()
 
 
+def quadrilaterals() -> None:
+    """Mesh surfaces with Frontal-Delaunay for quads (algorithm 6) and recombine every
+    triangle pair into quadrilaterals (Blossom)."""
+    import gmsh
+    for key, value in (("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
+                       ("Mesh.RecombinationAlgorithm", 1)):
+        gmsh.option.setNumber(key, value)
+
+
 def physical_group(dim: int, tags: Sequence[int], name: str) -> int:
     """Add the physical group ``name`` of the entities ``tags`` of dimension ``dim``."""
     import gmsh

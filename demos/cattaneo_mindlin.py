@@ -69,9 +69,7 @@ def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
         G.size_field([([bottom], h_contact, (2, cyl)),
                       ([mid], master_ratio * h_contact, (2, block))],
                      h_far, refine_radius, refine_radius + 12.0)
-        for key, value in (("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
-                           ("Mesh.RecombinationAlgorithm", 1)):  # quadrilaterals
-            gmsh.option.setNumber(key, value)
+        G.quadrilaterals()
 
         G.physical_group(2, [cyl], "cylinder")
         G.physical_group(2, [block], "block")

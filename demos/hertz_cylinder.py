@@ -64,9 +64,7 @@ def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
         # refine_radius from the first contact point, growing to h_far 12 further out
         G.size_field([([p0], h_contact, (2, cyl)), ([q[0]], master_ratio * h_contact, (2, block))],
                      h_far, refine_radius, refine_radius + 12.0)
-        for key, value in (("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
-                           ("Mesh.RecombinationAlgorithm", 1)):  # quadrilaterals
-            gmsh.option.setNumber(key, value)
+        G.quadrilaterals()
 
         G.physical_group(2, [cyl], "cylinder")
         G.physical_group(2, [block], "block")
