@@ -1,6 +1,6 @@
 """Scene files: TOML → validated :mod:`dolfinx_friction.scene.model` objects.
 
-The format is the contract of ``shared/scene-format.md`` (version 2).  This
+The format is that of ``docs/scene-format.md`` (versions 1 to 3).  This
 module is pure Python (no dolfinx): it checks the TOML structure (key names,
 required keys, tables and arrays of tables) and builds the model dataclasses,
 which check the values and the scene as a whole by the rules they share with
