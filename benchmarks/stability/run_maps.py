@@ -49,7 +49,15 @@ METHODS = {
     "CalculiX + LS": {"tangent": "calculix", "line_search": True},
     "exact, freeze at 2": {"pairing": 2},
     "exact, no freeze": {"pairing": "never"},
+    # augmented Lagrangian (Uzawa updates of the multipliers to 1e-4 of the spacing)
+    "augmented": {"contact_method": "augmented"},
+    "augmented + LS": {"contact_method": "augmented", "line_search": True},
+    # the package's default stick slope (the maps' cases without ``lam``: CalculiX's E/2)
+    "exact + LS, stick 1 E/h": {"line_search": True, "lam": 1.0},
+    "augmented + LS, stick 1 E/h": {"contact_method": "augmented", "line_search": True,
+                                    "lam": 1.0},
 }
+AUGMENTED = ["augmented", "augmented + LS"]
 QUICK_METHODS = ["exact", "exact + LS"]
 SWEEP_METHODS = ["exact", "exact + LS", "CalculiX tangent", "exact, no freeze"]
 
@@ -69,7 +77,9 @@ class Sweep:
     fixed: dict = field(default_factory=dict)
     methods: list = field(default_factory=lambda: list(METHODS))
     quick: dict | None = None  # overrides in --quick mode: x/y values, methods; None: skip
-    accuracy: str = "pen"  # what the cells/second panel show, see ACCURACY
+    #: what the cells / the second panel show, see ACCURACY: a key, or several keys (the
+    #: maps' cells show each; the 1D sweeps' panel the first)
+    accuracy: str | tuple = "pen"
     note: str = ""
 
     def axes(self, quick: bool):
@@ -81,6 +91,13 @@ class Sweep:
                 y = (y[0], q.get("y", y[1]), *y[2:])
             methods = q.get("methods", methods)
         return x, y, methods
+
+    @property
+    def measures(self) -> tuple:
+        return (self.accuracy,) if isinstance(self.accuracy, str) else tuple(self.accuracy)
+
+    def label(self) -> str:
+        return "; ".join(ACCURACY[m][0] for m in self.measures)
 
     def cases(self, quick: bool) -> list[dict]:
         x, y, methods = self.axes(quick)
@@ -126,13 +143,13 @@ SWEEPS = [
           "Hertz cylinder (demo, coarse): penalty K x increments of the press",
           x=("k", K_VALUES, "K / (E/h)", True),
           y=("increments", [1, 2, 4, 8], "increments (press 0.25)", True),
-          accuracy="hertz", methods=TANGENTS_LS + ["exact, no freeze"],
+          accuracy=("hertz", "pen"), methods=TANGENTS_LS + ["exact, no freeze"] + AUGMENTED,
           quick=dict(x=K_QUICK, y=[1, 4], methods=["exact"])),
     Sweep("ironing_K_increment", "ironing",
           "ironing (demo, coarse): penalty K x drag per increment",
           x=("k", K_VALUES, "K / (E/h)", True),
           y=("slide_faces", [0.25, 0.5, 1.0, 2.0], "drag per increment / master face", True),
-          accuracy="Fn_osc",
+          accuracy=("Fn_osc", "pen"),
           quick=dict(x=K_QUICK, y=[0.5, 1.0], methods=QUICK_METHODS)),
     Sweep("block3d_K_increment", "block3d",
           "sliding block (3D demo, coarse): penalty K x slide increments",
@@ -144,7 +161,7 @@ SWEEPS = [
           x=("lam", [1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0], "stick slope / (E/h)", True),
           y=("mu", [0.0, 0.1, 0.3, 0.6, 1.0], "mu", False),
           fixed=dict(slide_faces=0.25), accuracy="ratio",
-          methods=["exact", "exact + LS", "CalculiX tangent"],
+          methods=["exact", "exact + LS", "CalculiX tangent", "augmented + LS"],
           quick=dict(x=[1e-3, 1e-1, 10.0], y=[0.0, 0.3, 1.0], methods=["exact"])),
     Sweep("ironing_stick_mu", "ironing", "ironing (demo): stick slope x friction coefficient",
           x=("lam", [1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0], "stick slope / (E/h)", True),
@@ -247,6 +264,7 @@ def run_sweeps(sweeps: list[Sweep], quick: bool, workers: int, rerun: bool) -> d
             _key(r["case"]): r for r in json.loads(path.read_text())}
         cached[s.name] = old
         todo += [(s.name, c) for c in s.cases(quick) if rerun or _key(c) not in old]
+    commit = _machine()["commit"]
     print(f"{len(todo)} cases to run on {workers} worker(s)", flush=True)
     t0 = time.perf_counter()
     new: dict[str, list] = {s.name: [] for s in sweeps}
@@ -257,6 +275,7 @@ def run_sweeps(sweeps: list[Sweep], quick: bool, workers: int, rerun: bool) -> d
             it = pool.imap(_work, [c for _, c in todo], chunksize=1)
             for n, ((name, case), res) in enumerate(zip(todo, it), 1):
                 res = {k: v for k, v in res.items() if k != "traceback" or res["status"] == "error"}
+                res["commit"] = commit
                 new[name].append({"case": case, "result": res})
                 print(f"[{n}/{len(todo)} {time.perf_counter() - t0:5.0f} s] {name} "
                       f"{ {k: v for k, v in case.items() if k != 'family'} } -> {res['status']}"
@@ -304,7 +323,7 @@ def outcome(r: dict) -> str:
     return s
 
 
-def cell_text(r: dict, accuracy: str) -> str:
+def cell_text(r: dict, measures: tuple) -> str:
     o = outcome(r)
     if o in ("failed", "stalled", "timeout", "error"):
         t = r.get("t_reached")
@@ -315,10 +334,11 @@ def cell_text(r: dict, accuracy: str) -> str:
         txt += f" c{r['cutbacks']}"
     if o == "lost":
         return txt + "\nlost"
-    _, f, fmt = ACCURACY[accuracy]
-    v = f(r)
-    if v is not None:
-        txt += "\n" + fmt(v)
+    for m in measures:
+        _, f, fmt = ACCURACY[m]
+        v = f(r)
+        if v is not None:
+            txt += "\n" + fmt(v)
     if r.get("warned"):
         txt += "*"
     if r.get("detached"):
@@ -354,7 +374,7 @@ def _legend_handles():
 def _reference(sweep: Sweep, results: list[dict]) -> None:
     """Fill ``Fn_err`` (gap sweep): the normal force against the zero-gap run of the same
     method (the final indentation is the same for every initial gap)."""
-    if sweep.accuracy != "Fn":
+    if "Fn" not in sweep.measures:
         return
     ref = {}
     for r in results:
@@ -391,7 +411,7 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
                 o = outcome(r)
                 grid[j, i] = order.index(o)
                 dark = o in ("lost", "failed", "error")
-                ax.text(i, j, cell_text(r, sweep.accuracy), ha="center", va="center",
+                ax.text(i, j, cell_text(r, sweep.measures), ha="center", va="center",
                         fontsize=6.5, color="white" if dark else "black")
         grid = np.ma.masked_invalid(grid)
         ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(order) - 0.5, origin="lower",
@@ -403,7 +423,7 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
         ax.set_title(m, fontsize=9)
     for ax in axes.ravel()[len(methods):]:
         ax.axis("off")
-    label = ACCURACY[sweep.accuracy][0]
+    label = sweep.label()
     fig.suptitle(f"{sweep.title}\ncell: Newton iterations per increment (mean), cN = N cutbacks"
                  f"\n2nd line: {label}; * = penetration warning; x: failed at load time t",
                  fontsize=8.5)
@@ -430,7 +450,7 @@ def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.8), dpi=110)
     numeric = all(isinstance(v, (int, float)) for v in x[1])
     pos = {(_key(v)): (v if numeric else i) for i, v in enumerate(x[1])}
-    _, f, _ = ACCURACY[sweep.accuracy]
+    _, f, _ = ACCURACY[sweep.measures[0]]
     for k, m in enumerate(methods):
         rs = sorted((r for r in results if r["case"]["method"] == m),
                     key=lambda r: x[1].index(r["case"][x[0]]))
@@ -460,7 +480,7 @@ def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
     a1.set_ylabel("Newton iterations, whole run (incl. cutbacks)")
     a1.legend(fontsize=7)
     a2.set_yscale("log")
-    a2.set_ylabel(ACCURACY[sweep.accuracy][0], fontsize=8)
+    a2.set_ylabel(ACCURACY[sweep.measures[0]][0], fontsize=8)
     a2.set_title("accuracy where converged", fontsize=9)
     fig.suptitle(sweep.title, fontsize=10)
     fig.legend(handles=_legend_handles(), loc="lower center", ncol=4, fontsize=7,
@@ -511,7 +531,7 @@ def table(sweep: Sweep, results: list[dict], quick: bool) -> str:
             t = r.get("t_reached")
             name = "FAILED" if o != "stalled" else f"STALLED {last_residual(r):.0e}"
             return f"**{name}**" + (f" (t={t:.3g})" if t is not None else "")
-        txt = cell_text(r, sweep.accuracy).replace("\n", " ")
+        txt = cell_text(r, sweep.measures).replace("\n", " ")
         return ("**LOST** " + txt[:-len(" lost")]) if o == "lost" else txt
 
     lines = []
@@ -539,6 +559,15 @@ def counts(results: list[dict]) -> str:
         c[o] = c.get(o, 0) + 1
     order = list(OUTCOMES)
     return ", ".join(f"{n} {o}" for o, n in sorted(c.items(), key=lambda t: order.index(t[0])))
+
+
+def commits(results: list[dict]) -> str:
+    """The package commits the runs were made at (older cached runs carry none)."""
+    c: dict = {}
+    for r in results:
+        k = r["result"].get("commit", "68f56e6 (the full run)")
+        c[k] = c.get(k, 0) + 1
+    return ", ".join(f"{n} at {k}" for k, n in c.items())
 
 
 def _results(quick: bool) -> Path:
@@ -591,8 +620,8 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
             continue
         fig = figures.get(s.name)
         parts += [f"## {s.title}", "",
-                  f"`{s.name}`: {len(rs)} runs ({counts(rs)}). Accuracy: "
-                  f"{ACCURACY[s.accuracy][0]}. Figure: "
+                  f"`{s.name}`: {len(rs)} runs ({counts(rs)}; {commits(rs)}). Accuracy: "
+                  f"{s.label()}. Figure: "
                   f"`{fig.relative_to(HERE)}`" if fig else "", ""]
         if s.note:
             parts += [s.note, ""]
