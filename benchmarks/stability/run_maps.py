@@ -149,7 +149,7 @@ SWEEPS = [
           "ironing (demo, coarse): penalty K x drag per increment",
           x=("k", K_VALUES, "K / (E/h)", True),
           y=("slide_faces", [0.25, 0.5, 1.0, 2.0], "drag per increment / master face", True),
-          accuracy=("Fn_osc", "pen"),
+          accuracy=("Fn_osc", "pen"), methods=list(METHODS)[:8],
           quick=dict(x=K_QUICK, y=[0.5, 1.0], methods=QUICK_METHODS)),
     Sweep("block3d_K_increment", "block3d",
           "sliding block (3D demo, coarse): penalty K x slide increments",
@@ -587,7 +587,8 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
         f"{machine['python']}; 1-min load average {machine['load']} at the start (the machine "
         f"is shared with other jobs, so wall times are indicative only)",
         f"* package: git commit {machine.get('commit', 'unknown')} (the maps describe the "
-        f"solver as of that commit)",
+        f"solver as of that commit); a sweep rerun since (`--only`) names its runs' commits "
+        f"in its first line",
         "* what the findings mean, and where each method stops working: `README.md`",
         "",
         "Cell legend: `4.2 c3` = converged with 4.2 Newton iterations per converged increment on "
