@@ -297,6 +297,7 @@ OUTCOMES = {  # display order, colour, legend
     "cutback": ("#ffd92f", "converged after cutbacks"),
     "lost": ("#984ea3", "accepted with the contact lost (wrong)"),
     "stalled": ("#ff7f00", "failed: residual stuck at round-off (tolerance)"),
+    "updates": ("#f781bf", "failed: 25 multiplier updates short of the tolerance"),
     "failed": ("#e41a1c", "failed (after all cutbacks)"),
     "timeout": ("#999999", "time limit"),
     "error": ("#000000", "error (exception)"),
@@ -314,20 +315,30 @@ def last_residual(r: dict):
     return float(m.group(1)) if m else None
 
 
+#: the failure of an augmented Lagrangian increment whose solves converged but whose
+#: multiplier updates did not reach the tolerance (nls/stepping.py)
+UPDATES = "augmented Lagrangian updates did not bring"
+
+
 def outcome(r: dict) -> str:
     s = r["status"]
     if s in ("ok", "cutback") and r.get("lost"):
         return "lost"
+    if s == "failed" and UPDATES in r.get("message", ""):
+        return "updates"
     if s == "failed" and (last_residual(r) or 1.0) < STALL:
         return "stalled"
     return s
 
 
+FAILURES = ("failed", "stalled", "updates", "timeout", "error")
+
+
 def cell_text(r: dict, measures: tuple) -> str:
     o = outcome(r)
-    if o in ("failed", "stalled", "timeout", "error"):
+    if o in FAILURES:
         t = r.get("t_reached")
-        mark = "x" if o != "stalled" else f"x {last_residual(r):.0e}"
+        mark = {"stalled": f"x {last_residual(r):.0e}", "updates": "x upd"}.get(o, "x")
         return mark if t is None else f"{mark}\nt={t:.2g}"
     txt = f"{r['mean_iterations']:.1f}"
     if r.get("cutbacks"):
@@ -440,7 +451,7 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
 
 
 MARKERS = {"ok": "o", "cutback": "s", "lost": "D", "stalled": "P", "failed": "X", "timeout": "X",
-           "error": "X"}
+           "error": "X", "updates": "X"}
 
 
 def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
@@ -527,9 +538,10 @@ def table(sweep: Sweep, results: list[dict], quick: bool) -> str:
         if r is None:
             return ""
         o = outcome(r)
-        if o in ("failed", "stalled", "timeout", "error"):
+        if o in FAILURES:
             t = r.get("t_reached")
-            name = "FAILED" if o != "stalled" else f"STALLED {last_residual(r):.0e}"
+            name = {"stalled": f"STALLED {last_residual(r):.0e}",
+                    "updates": "FAILED (updates)"}.get(o, "FAILED")
             return f"**{name}**" + (f" (t={t:.3g})" if t is not None else "")
         txt = cell_text(r, sweep.measures).replace("\n", " ")
         return ("**LOST** " + txt[:-len(" lost")]) if o == "lost" else txt
@@ -601,7 +613,10 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
         "slid off the master surface (summed over increments); **FAILED (t=...)** = an increment still failed after "
         "5 successive halvings, `t` = the load-step time reached; **STALLED 1e-10 (t=...)** = "
         "failed the same way, but the last residual (here 1e-10) sits at the round-off floor: "
-        "the iterate had converged and the stopping test could not see it; LOST = the solver "
+        "the iterate had converged and the stopping test could not see it; **FAILED "
+        "(updates)** = an augmented Lagrangian increment still failed after the cutbacks "
+        "because its solves converged but 25 multiplier updates did not bring the "
+        "overclosure and the stick slip below the tolerance; LOST = the solver "
         "accepted "
         "an increment in which the contact carrying the load had vanished (no slave node "
         "in contact, or the normal force below 10 % of its value after the press): the run "
