@@ -438,7 +438,7 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
     fig.suptitle(f"{sweep.title}\ncell: Newton iterations per increment (mean), cN = N cutbacks"
                  f"\n2nd line: {label}; * = penetration warning; x: failed at load time t",
                  fontsize=8.5)
-    per_row = len(OUTCOMES) if ncol >= 3 else 4
+    per_row = 4
     fig.legend(handles=_legend_handles(), loc="lower center", ncol=per_row, fontsize=7,
                frameon=False)
     rows = math.ceil(len(OUTCOMES) / per_row)
