@@ -255,7 +255,9 @@ def cached_mesh(kind: str, builder, **params) -> Path:
 def _contact(case: dict, slave: str, master: str, h: float, E_slave: float, mu: float):
     """The contact pair of a case: K and the stick slope given as multiples of E_slave / h;
     without ``lam`` the stick slope of the maps, CalculiX's E/2 (the default before
-    scene-format version 2)."""
+    scene-format version 2); ``contact_method``: ``"penalty"`` (default) or
+    ``"augmented"`` (augmented Lagrangian; ``augmented_tolerance``, default 1e-4 of the
+    spacing)."""
     from dolfinx_friction.scene.model import ContactPair
     k = case.get("k", 10.0)
     lam = case.get("lam")
@@ -263,7 +265,9 @@ def _contact(case: dict, slave: str, master: str, h: float, E_slave: float, mu: 
     return ContactPair(slave, master, K=k * E_slave / h, mu=case.get("mu", mu),
                        stick_slope="calculix" if lam is None else lam * E_slave / h,
                        tangent=case.get("tangent", "consistent"),
-                       pairing_iterations=1000 if pi in (None, "never", 0) else int(pi))
+                       pairing_iterations=1000 if pi in (None, "never", 0) else int(pi),
+                       method=case.get("contact_method", "penalty"),
+                       augmented_tolerance=case.get("augmented_tolerance", 1e-4))
 
 
 def _step_kw(case: dict) -> dict:

@@ -49,7 +49,15 @@ METHODS = {
     "CalculiX + LS": {"tangent": "calculix", "line_search": True},
     "exact, freeze at 2": {"pairing": 2},
     "exact, no freeze": {"pairing": "never"},
+    # augmented Lagrangian (Uzawa updates of the multipliers to 1e-4 of the spacing)
+    "augmented": {"contact_method": "augmented"},
+    "augmented + LS": {"contact_method": "augmented", "line_search": True},
+    # the package's default stick slope (the maps' cases without ``lam``: CalculiX's E/2)
+    "exact + LS, stick 1 E/h": {"line_search": True, "lam": 1.0},
+    "augmented + LS, stick 1 E/h": {"contact_method": "augmented", "line_search": True,
+                                    "lam": 1.0},
 }
+AUGMENTED = ["augmented", "augmented + LS"]
 QUICK_METHODS = ["exact", "exact + LS"]
 SWEEP_METHODS = ["exact", "exact + LS", "CalculiX tangent", "exact, no freeze"]
 
@@ -69,7 +77,9 @@ class Sweep:
     fixed: dict = field(default_factory=dict)
     methods: list = field(default_factory=lambda: list(METHODS))
     quick: dict | None = None  # overrides in --quick mode: x/y values, methods; None: skip
-    accuracy: str = "pen"  # what the cells/second panel show, see ACCURACY
+    #: what the cells / the second panel show, see ACCURACY: a key, or several keys (the
+    #: maps' cells show each; the 1D sweeps' panel the first)
+    accuracy: str | tuple = "pen"
     note: str = ""
 
     def axes(self, quick: bool):
@@ -81,6 +91,13 @@ class Sweep:
                 y = (y[0], q.get("y", y[1]), *y[2:])
             methods = q.get("methods", methods)
         return x, y, methods
+
+    @property
+    def measures(self) -> tuple:
+        return (self.accuracy,) if isinstance(self.accuracy, str) else tuple(self.accuracy)
+
+    def label(self) -> str:
+        return "; ".join(ACCURACY[m][0] for m in self.measures)
 
     def cases(self, quick: bool) -> list[dict]:
         x, y, methods = self.axes(quick)
@@ -126,13 +143,13 @@ SWEEPS = [
           "Hertz cylinder (demo, coarse): penalty K x increments of the press",
           x=("k", K_VALUES, "K / (E/h)", True),
           y=("increments", [1, 2, 4, 8], "increments (press 0.25)", True),
-          accuracy="hertz", methods=TANGENTS_LS + ["exact, no freeze"],
+          accuracy=("hertz", "pen"), methods=TANGENTS_LS + ["exact, no freeze"] + AUGMENTED,
           quick=dict(x=K_QUICK, y=[1, 4], methods=["exact"])),
     Sweep("ironing_K_increment", "ironing",
           "ironing (demo, coarse): penalty K x drag per increment",
           x=("k", K_VALUES, "K / (E/h)", True),
           y=("slide_faces", [0.25, 0.5, 1.0, 2.0], "drag per increment / master face", True),
-          accuracy="Fn_osc",
+          accuracy=("Fn_osc", "pen"), methods=list(METHODS)[:8],
           quick=dict(x=K_QUICK, y=[0.5, 1.0], methods=QUICK_METHODS)),
     Sweep("block3d_K_increment", "block3d",
           "sliding block (3D demo, coarse): penalty K x slide increments",
@@ -144,7 +161,7 @@ SWEEPS = [
           x=("lam", [1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0], "stick slope / (E/h)", True),
           y=("mu", [0.0, 0.1, 0.3, 0.6, 1.0], "mu", False),
           fixed=dict(slide_faces=0.25), accuracy="ratio",
-          methods=["exact", "exact + LS", "CalculiX tangent"],
+          methods=["exact", "exact + LS", "CalculiX tangent", "augmented + LS"],
           quick=dict(x=[1e-3, 1e-1, 10.0], y=[0.0, 0.3, 1.0], methods=["exact"])),
     Sweep("ironing_stick_mu", "ironing", "ironing (demo): stick slope x friction coefficient",
           x=("lam", [1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0], "stick slope / (E/h)", True),
@@ -247,6 +264,7 @@ def run_sweeps(sweeps: list[Sweep], quick: bool, workers: int, rerun: bool) -> d
             _key(r["case"]): r for r in json.loads(path.read_text())}
         cached[s.name] = old
         todo += [(s.name, c) for c in s.cases(quick) if rerun or _key(c) not in old]
+    commit = _machine()["commit"]
     print(f"{len(todo)} cases to run on {workers} worker(s)", flush=True)
     t0 = time.perf_counter()
     new: dict[str, list] = {s.name: [] for s in sweeps}
@@ -257,6 +275,7 @@ def run_sweeps(sweeps: list[Sweep], quick: bool, workers: int, rerun: bool) -> d
             it = pool.imap(_work, [c for _, c in todo], chunksize=1)
             for n, ((name, case), res) in enumerate(zip(todo, it), 1):
                 res = {k: v for k, v in res.items() if k != "traceback" or res["status"] == "error"}
+                res["commit"] = commit
                 new[name].append({"case": case, "result": res})
                 print(f"[{n}/{len(todo)} {time.perf_counter() - t0:5.0f} s] {name} "
                       f"{ {k: v for k, v in case.items() if k != 'family'} } -> {res['status']}"
@@ -278,6 +297,7 @@ OUTCOMES = {  # display order, colour, legend
     "cutback": ("#ffd92f", "converged after cutbacks"),
     "lost": ("#984ea3", "accepted with the contact lost (wrong)"),
     "stalled": ("#ff7f00", "failed: residual stuck at round-off (tolerance)"),
+    "updates": ("#f781bf", "failed: 25 multiplier updates short of the tolerance"),
     "failed": ("#e41a1c", "failed (after all cutbacks)"),
     "timeout": ("#999999", "time limit"),
     "error": ("#000000", "error (exception)"),
@@ -295,30 +315,41 @@ def last_residual(r: dict):
     return float(m.group(1)) if m else None
 
 
+#: the failure of an augmented Lagrangian increment whose solves converged but whose
+#: multiplier updates did not reach the tolerance (nls/stepping.py)
+UPDATES = "augmented Lagrangian updates did not bring"
+
+
 def outcome(r: dict) -> str:
     s = r["status"]
     if s in ("ok", "cutback") and r.get("lost"):
         return "lost"
+    if s == "failed" and UPDATES in r.get("message", ""):
+        return "updates"
     if s == "failed" and (last_residual(r) or 1.0) < STALL:
         return "stalled"
     return s
 
 
-def cell_text(r: dict, accuracy: str) -> str:
+FAILURES = ("failed", "stalled", "updates", "timeout", "error")
+
+
+def cell_text(r: dict, measures: tuple) -> str:
     o = outcome(r)
-    if o in ("failed", "stalled", "timeout", "error"):
+    if o in FAILURES:
         t = r.get("t_reached")
-        mark = "x" if o != "stalled" else f"x {last_residual(r):.0e}"
+        mark = {"stalled": f"x {last_residual(r):.0e}", "updates": "x upd"}.get(o, "x")
         return mark if t is None else f"{mark}\nt={t:.2g}"
     txt = f"{r['mean_iterations']:.1f}"
     if r.get("cutbacks"):
         txt += f" c{r['cutbacks']}"
     if o == "lost":
         return txt + "\nlost"
-    _, f, fmt = ACCURACY[accuracy]
-    v = f(r)
-    if v is not None:
-        txt += "\n" + fmt(v)
+    for m in measures:
+        _, f, fmt = ACCURACY[m]
+        v = f(r)
+        if v is not None:
+            txt += "\n" + fmt(v)
     if r.get("warned"):
         txt += "*"
     if r.get("detached"):
@@ -354,7 +385,7 @@ def _legend_handles():
 def _reference(sweep: Sweep, results: list[dict]) -> None:
     """Fill ``Fn_err`` (gap sweep): the normal force against the zero-gap run of the same
     method (the final indentation is the same for every initial gap)."""
-    if sweep.accuracy != "Fn":
+    if "Fn" not in sweep.measures:
         return
     ref = {}
     for r in results:
@@ -391,7 +422,7 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
                 o = outcome(r)
                 grid[j, i] = order.index(o)
                 dark = o in ("lost", "failed", "error")
-                ax.text(i, j, cell_text(r, sweep.accuracy), ha="center", va="center",
+                ax.text(i, j, cell_text(r, sweep.measures), ha="center", va="center",
                         fontsize=6.5, color="white" if dark else "black")
         grid = np.ma.masked_invalid(grid)
         ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(order) - 0.5, origin="lower",
@@ -403,11 +434,11 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
         ax.set_title(m, fontsize=9)
     for ax in axes.ravel()[len(methods):]:
         ax.axis("off")
-    label = ACCURACY[sweep.accuracy][0]
+    label = sweep.label()
     fig.suptitle(f"{sweep.title}\ncell: Newton iterations per increment (mean), cN = N cutbacks"
                  f"\n2nd line: {label}; * = penetration warning; x: failed at load time t",
                  fontsize=8.5)
-    per_row = len(OUTCOMES) if ncol >= 3 else 4
+    per_row = 4
     fig.legend(handles=_legend_handles(), loc="lower center", ncol=per_row, fontsize=7,
                frameon=False)
     rows = math.ceil(len(OUTCOMES) / per_row)
@@ -420,7 +451,7 @@ def plot_map(sweep: Sweep, results: list[dict], quick: bool) -> Path:
 
 
 MARKERS = {"ok": "o", "cutback": "s", "lost": "D", "stalled": "P", "failed": "X", "timeout": "X",
-           "error": "X"}
+           "error": "X", "updates": "X"}
 
 
 def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
@@ -430,7 +461,7 @@ def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.8), dpi=110)
     numeric = all(isinstance(v, (int, float)) for v in x[1])
     pos = {(_key(v)): (v if numeric else i) for i, v in enumerate(x[1])}
-    _, f, _ = ACCURACY[sweep.accuracy]
+    _, f, _ = ACCURACY[sweep.measures[0]]
     for k, m in enumerate(methods):
         rs = sorted((r for r in results if r["case"]["method"] == m),
                     key=lambda r: x[1].index(r["case"][x[0]]))
@@ -460,7 +491,7 @@ def plot_sweep(sweep: Sweep, results: list[dict], quick: bool) -> Path:
     a1.set_ylabel("Newton iterations, whole run (incl. cutbacks)")
     a1.legend(fontsize=7)
     a2.set_yscale("log")
-    a2.set_ylabel(ACCURACY[sweep.accuracy][0], fontsize=8)
+    a2.set_ylabel(ACCURACY[sweep.measures[0]][0], fontsize=8)
     a2.set_title("accuracy where converged", fontsize=9)
     fig.suptitle(sweep.title, fontsize=10)
     fig.legend(handles=_legend_handles(), loc="lower center", ncol=4, fontsize=7,
@@ -507,11 +538,12 @@ def table(sweep: Sweep, results: list[dict], quick: bool) -> str:
         if r is None:
             return ""
         o = outcome(r)
-        if o in ("failed", "stalled", "timeout", "error"):
+        if o in FAILURES:
             t = r.get("t_reached")
-            name = "FAILED" if o != "stalled" else f"STALLED {last_residual(r):.0e}"
+            name = {"stalled": f"STALLED {last_residual(r):.0e}",
+                    "updates": "FAILED (updates)"}.get(o, "FAILED")
             return f"**{name}**" + (f" (t={t:.3g})" if t is not None else "")
-        txt = cell_text(r, sweep.accuracy).replace("\n", " ")
+        txt = cell_text(r, sweep.measures).replace("\n", " ")
         return ("**LOST** " + txt[:-len(" lost")]) if o == "lost" else txt
 
     lines = []
@@ -541,6 +573,15 @@ def counts(results: list[dict]) -> str:
     return ", ".join(f"{n} {o}" for o, n in sorted(c.items(), key=lambda t: order.index(t[0])))
 
 
+def commits(results: list[dict]) -> str:
+    """The package commits the runs were made at (older cached runs carry none)."""
+    c: dict = {}
+    for r in results:
+        k = r["result"].get("commit", "68f56e6 (the full run)")
+        c[k] = c.get(k, 0) + 1
+    return ", ".join(f"{n} at {k}" for k, n in c.items())
+
+
 def _results(quick: bool) -> Path:
     return RESULTS.with_name("RESULTS-quick.md") if quick else RESULTS
 
@@ -558,7 +599,8 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
         f"{machine['python']}; 1-min load average {machine['load']} at the start (the machine "
         f"is shared with other jobs, so wall times are indicative only)",
         f"* package: git commit {machine.get('commit', 'unknown')} (the maps describe the "
-        f"solver as of that commit)",
+        f"solver as of that commit); a sweep rerun since (`--only`) names its runs' commits "
+        f"in its first line",
         "* what the findings mean, and where each method stops working: `README.md`",
         "",
         "Cell legend: `4.2 c3` = converged with 4.2 Newton iterations per converged increment on "
@@ -571,7 +613,10 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
         "slid off the master surface (summed over increments); **FAILED (t=...)** = an increment still failed after "
         "5 successive halvings, `t` = the load-step time reached; **STALLED 1e-10 (t=...)** = "
         "failed the same way, but the last residual (here 1e-10) sits at the round-off floor: "
-        "the iterate had converged and the stopping test could not see it; LOST = the solver "
+        "the iterate had converged and the stopping test could not see it; **FAILED "
+        "(updates)** = an augmented Lagrangian increment still failed after the cutbacks "
+        "because its solves converged but 25 multiplier updates did not bring the "
+        "overclosure and the stick slip below the tolerance; LOST = the solver "
         "accepted "
         "an increment in which the contact carrying the load had vanished (no slave node "
         "in contact, or the normal force below 10 % of its value after the press): the run "
@@ -591,8 +636,8 @@ def write_results(sweeps, results, quick: bool, machine: dict, wall: float, figu
             continue
         fig = figures.get(s.name)
         parts += [f"## {s.title}", "",
-                  f"`{s.name}`: {len(rs)} runs ({counts(rs)}). Accuracy: "
-                  f"{ACCURACY[s.accuracy][0]}. Figure: "
+                  f"`{s.name}`: {len(rs)} runs ({counts(rs)}; {commits(rs)}). Accuracy: "
+                  f"{s.label()}. Figure: "
                   f"`{fig.relative_to(HERE)}`" if fig else "", ""]
         if s.note:
             parts += [s.note, ""]
