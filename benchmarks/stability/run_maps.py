@@ -556,7 +556,7 @@ def table(sweep: Sweep, results: list[dict], quick: bool) -> str:
     else:
         for m in methods:
             lines.append(f"\n*{m}* (rows: {y[2]}; columns: {x[2]})\n")
-            lines.append(f"| | " + " | ".join(_fmt_value(v) for v in x[1]) + " |")
+            lines.append("| | " + " | ".join(_fmt_value(v) for v in x[1]) + " |")
             lines.append("|---:|" + "---|" * len(x[1]))
             for yv in y[1]:
                 lines.append(f"| {_fmt_value(yv)} | " + " | ".join(
