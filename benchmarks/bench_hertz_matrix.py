@@ -81,13 +81,20 @@ def report(rows: list[dict], machine: dict, load_end: float) -> str:
     def pct(x: float) -> str:
         return f"{100 * x:+.3f}"
     table_rows = []
-    for r in sorted(rows, key=lambda r: (r["cell"], r["h"], r["method"], r["ranks"])):
-        table_rows.append([r["cell"].replace("-", " ").upper().replace("D ", "D "),
+    for r in sorted(rows, key=lambda r: (r["cell"], r["h"], METHODS.index(r["method"]),
+                                          r["ranks"])):
+        table_rows.append([r["cell"].replace("-", " ").upper(),
                            r["h"], f"{r['a_over_h']:.1f}", r["method"], r["ranks"],
                            f"{r['dofs']:,}", pct(r["err_p0"]), pct(r["err_a"]),
                            f"{100 * r['penetration']:.2g}",
                            f"{r['newton']}" + (f" ({r['cutbacks']} cb)" if r["cutbacks"] else ""),
                            B.fmt_s(r["cpu"]), B.fmt_s(r["wall"])])
+    serial = {(r["cell"], r["h"], r["method"]): r for r in rows if r["ranks"] == 1}
+    diffs = [abs(r[k] - serial[r["cell"], r["h"], r["method"]][k]) for r in rows
+             if r["ranks"] > 1 and (r["cell"], r["h"], r["method"]) in serial
+             for k in ("err_p0", "err_a")]
+    agree = (f"* serial and 2 ranks: the errors differ by at most {max(diffs):.1e} (relative "
+             "to p0 and a)" if diffs else "* serial only")
     return "\n".join([
         f"### {TITLE}",
         "",
@@ -102,6 +109,7 @@ def report(rows: list[dict], machine: dict, load_end: float) -> str:
         "asserts |error| < 0.5 % on each.",
         "",
         f"* {B.machine_line(machine, load_end)}",
+        agree,
         "",
         B.table(["cell", "h", "a/h", "method", "ranks", "dofs", "err p0 [%]", "err a [%]",
                  "overclosure [%]", "Newton its", "CPU [s]", "wall [s]"], table_rows),
