@@ -123,7 +123,16 @@ def main(argv=None) -> None:
     ap.add_argument("--no-results", action="store_true", help="do not touch RESULTS.md")
     ap.add_argument("--serial-only", action="store_true")
     ap.add_argument("--rows", help=argparse.SUPPRESS)  # internal: rows of this run -> file
+    ap.add_argument("--from-json", nargs="+", help="no runs: report the rows of these files "
+                                                   "(written by --rows)")
     args = ap.parse_args(argv)
+    if args.from_json:
+        rows = [r for f in args.from_json for r in json.loads(Path(f).read_text())]
+        text = report(rows, B.machine(), B.load_average())
+        print(text)
+        if not args.no_results:
+            B.write_subsection(SECTION, TITLE, text)
+        return
     cells = args.cells.split(",")
     hs = [float(h) for h in args.h.split(",")] if args.h else None
     if args.rows:
