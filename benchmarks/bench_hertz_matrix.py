@@ -84,10 +84,13 @@ def report(rows: list[dict], machine: dict, load_end: float) -> str:
     for r in sorted(rows, key=lambda r: (r["cell"], r["h"], METHODS.index(r["method"]),
                                           r["ranks"])):
         table_rows.append([r["cell"].replace("-", " ").upper(),
-                           r["h"], f"{r['a_over_h']:.1f}", r["method"], r["ranks"],
-                           f"{r['dofs']:,}", pct(r["err_p0"]), pct(r["err_a"]),
-                           f"{100 * r['penetration']:.2g}",
-                           f"{r['newton']}" + (f" ({r['cutbacks']} cb)" if r["cutbacks"] else ""),
+                           r["h"], f"{r['a_over_h']:.1f}" if "a_over_h" in r else "-",
+                           r["method"], r["ranks"],
+                           f"{r['dofs']:,}" if "dofs" in r else "-",
+                           pct(r["err_p0"]), pct(r["err_a"]),
+                           f"{100 * r['penetration']:.2g}" if "penetration" in r else "-",
+                           f"{r['newton']}" + (f" ({r['cutbacks']} cb)" if r.get("cutbacks")
+                                               else ""),
                            B.fmt_s(r["cpu"]), B.fmt_s(r["wall"])])
     serial = {(r["cell"], r["h"], r["method"]): r for r in rows if r["ranks"] == 1}
     diffs = [abs(r[k] - serial[r["cell"], r["h"], r["method"]][k]) for r in rows

@@ -98,7 +98,7 @@ def test_hertz_within_half_a_percent(dim, degree, method, mesh_dir):
 @pytest.mark.parametrize("dim,degree", [(2, 2), (3, 1)])
 def test_ranks_give_the_serial_answer(dim, degree, mesh_dir):
     """Augmented, on the matrix's mesh: load, fitted p0 and a on all ranks are those of a
-    serial run of the same mesh (each rank alone) to 1e-9 (measured: 1e-13 and below)."""
+    serial run of the same mesh (each rank alone) to 1e-9 (measured 1.1e-14 on 2D P2)."""
     h = MESH_SIZE[dim, degree]
     mesh = mesh_dir / f"hertz{dim}d_h{h}_order{degree}.msh"
     if not MPI.COMM_WORLD.bcast(mesh.exists()):
