@@ -1,5 +1,6 @@
-"""The Hertz verification matrix (issue #26 item 4): error, CPU and Newton iterations of
-every cell of ``tests/verification/test_hertz_matrix.py``, serially and on 2 ranks.
+"""The Hertz verification matrix (issue #26 item 4): errors, CPU, Newton iterations.
+
+Every cell of ``tests/verification/test_hertz_matrix.py``, serially and on 2 ranks.
 
     python benchmarks/bench_hertz_matrix.py                  # both, writes RESULTS.md
     python benchmarks/bench_hertz_matrix.py --no-results     # print only
@@ -84,13 +85,10 @@ def report(rows: list[dict], machine: dict, load_end: float) -> str:
     for r in sorted(rows, key=lambda r: (r["cell"], r["h"], METHODS.index(r["method"]),
                                           r["ranks"])):
         table_rows.append([r["cell"].replace("-", " ").upper(),
-                           r["h"], f"{r['a_over_h']:.1f}" if "a_over_h" in r else "-",
-                           r["method"], r["ranks"],
-                           f"{r['dofs']:,}" if "dofs" in r else "-",
-                           pct(r["err_p0"]), pct(r["err_a"]),
-                           f"{100 * r['penetration']:.2g}" if "penetration" in r else "-",
-                           f"{r['newton']}" + (f" ({r['cutbacks']} cb)" if r.get("cutbacks")
-                                               else ""),
+                           r["h"], f"{r['a_over_h']:.1f}", r["method"], r["ranks"],
+                           f"{r['dofs']:,}", pct(r["err_p0"]), pct(r["err_a"]),
+                           f"{100 * r['penetration']:.2g}",
+                           f"{r['newton']}" + (f" ({r['cutbacks']} cb)" if r["cutbacks"] else ""),
                            B.fmt_s(r["cpu"]), B.fmt_s(r["wall"])])
     serial = {(r["cell"], r["h"], r["method"]): r for r in rows if r["ranks"] == 1}
     diffs = [abs(r[k] - serial[r["cell"], r["h"], r["method"]][k]) for r in rows
@@ -126,16 +124,7 @@ def main(argv=None) -> None:
     ap.add_argument("--no-results", action="store_true", help="do not touch RESULTS.md")
     ap.add_argument("--serial-only", action="store_true")
     ap.add_argument("--rows", help=argparse.SUPPRESS)  # internal: rows of this run -> file
-    ap.add_argument("--from-json", nargs="+", help="no runs: report the rows of these files "
-                                                   "(written by --rows)")
     args = ap.parse_args(argv)
-    if args.from_json:
-        rows = [r for f in args.from_json for r in json.loads(Path(f).read_text())]
-        text = report(rows, B.machine(), B.load_average())
-        print(text)
-        if not args.no_results:
-            B.write_subsection(SECTION, TITLE, text)
-        return
     cells = args.cells.split(",")
     hs = [float(h) for h in args.h.split(",")] if args.h else None
     if args.rows:
