@@ -275,15 +275,43 @@ def emit(result: dict) -> None:
 
 
 # ----------------------------------------------------------------------------- output
-def write_section(title: str, body: str) -> None:
-    """Replace (or append) the section ``## title`` of RESULTS.md; other sections are kept."""
+def _subsection(title: str) -> re.Pattern:
+    return re.compile(rf"^### {re.escape(title)}\n.*?(?=^##+ |\Z)", re.S | re.M)
+
+
+def write_section(title: str, body: str, keep: tuple[str, ...] = ()) -> None:
+    """Replace (or append) the section ``## title`` of RESULTS.md; other sections are kept,
+    and so are its subsections ``### <keep>`` (written by other scripts)."""
     text = RESULTS.read_text() if RESULTS.exists() else "# Benchmarks\n"
     block = f"## {title}\n\n{body.strip()}\n"
     pattern = re.compile(rf"^## {re.escape(title)}\n.*?(?=^## |\Z)", re.S | re.M)
-    if pattern.search(text):
+    old = pattern.search(text)
+    for sub in keep:
+        kept = _subsection(sub).search(old.group(0)) if old else None
+        if kept:
+            block += "\n" + kept.group(0).strip() + "\n"
+    if old:
         text = pattern.sub(lambda _: block + "\n", text, count=1)
     else:
         text = text.rstrip("\n") + "\n\n" + block
+    RESULTS.write_text(text.rstrip("\n") + "\n")
+
+
+def write_subsection(section: str, title: str, body: str) -> None:
+    """Replace the subsection ``### title`` (``body`` starts with that line) of the section
+    ``## section`` of RESULTS.md, or add it at the section's end."""
+    text = RESULTS.read_text()
+    pattern = re.compile(rf"^## {re.escape(section)}\n.*?(?=^## |\Z)", re.S | re.M)
+    old = pattern.search(text)
+    if old is None:
+        raise SystemExit(f"RESULTS.md has no section '## {section}'")
+    part = old.group(0)
+    block = body.strip() + "\n\n"
+    if _subsection(title).search(part):
+        part = _subsection(title).sub(lambda _: block, part, count=1)
+    else:
+        part = part.rstrip("\n") + "\n\n" + block
+    text = text[:old.start()] + part + text[old.end():]
     RESULTS.write_text(text.rstrip("\n") + "\n")
 
 
