@@ -430,7 +430,7 @@ def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: f
             names.setdefault(name, []).append(s)
         _graded(h_contact, h_far, refine_radius, growth)
         gmsh.option.setNumber("Mesh.Algorithm", 6)
-        gmsh.option.setNumber("Mesh.Algorithm3D", 10)
+        gmsh.option.setNumber("Mesh.Algorithm3D", 1)  # Delaunay: the same tetrahedra every run (HXT: not)
         gmsh.model.mesh.generate(3)
         gmsh.model.mesh.setOrder(order)
         group(3, [vol], "sphere")

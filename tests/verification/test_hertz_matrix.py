@@ -32,8 +32,8 @@ cell     h      penalty (the defaults)           augmented
 =======  =====  ===============================  ===============================
 2D P1    0.025  -0.068 % / +0.086 %, 0.1 s       +0.140 % / -0.114 %, 0.12 s
 2D P2    0.025  -0.027 % / +0.032 %, 0.6 s       +0.071 % / -0.003 %, 0.7 s
-3D P1    0.035  -0.178 % / +0.372 %, 7.9 s       +0.143 % / +0.347 %, 9.4 s
-3D P2    0.07   -0.709 % / +0.435 %, 17 s (1 %)  -0.386 % / +0.509 %, 28 s (1 %)
+3D P1    0.035  -0.206 % / +0.345 %, 7.9 s       +0.102 % / +0.340 %, 9.4 s
+3D P2    0.07   -0.689 % / +0.405 %, 17 s (1 %)  -0.340 % / +0.418 %, 28 s (1 %)
 =======  =====  ===============================  ===============================
 
 **3D P2 does not reach 0.5 % with margin at a cost a test can carry**, so its two cells
@@ -45,9 +45,10 @@ The penalty's share (penalty - augmented on one mesh: the layer's compliance p/K
 default K = 10 E/h) falls with h as K grows; P1 meets 0.5 % at the defaults partly by a
 cancellation: the same share (-0.31 % at h = 0.035) against a positive discretisation
 error (+0.14 %, augmented).  The 3D errors of a are the scatter of the nodal pressures in
-the band at the contact edge; gmsh's 3D mesher (HXT) does not give the same tetrahedra
-from run to run, and a moves by up to 0.1 % with them (3D P2 augmented, h = 0.07: +0.415
-and +0.509 % on two meshes of the same settings).
+the band at the contact edge.  The 3D meshes are gmsh's Delaunay tetrahedra, the same in
+every run (the 3D errors above were measured on them; HXT, used before, gave other
+tetrahedra in every run, even on one thread, and moved a by up to 0.1 %: +0.415 and
++0.509 % for 3D P2 augmented on two meshes of the same settings).
 """
 from __future__ import annotations
 
