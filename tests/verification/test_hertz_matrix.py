@@ -84,6 +84,9 @@ def mesh_dir():
 def test_hertz_within_half_a_percent(dim, degree, method, mesh_dir):
     """Fitted p0 and a within 0.5 % of Hertz's, 3D P2 within 1 % (measured: the module
     docstring's table), no overclosure warning."""
+    if (dim, degree) == (3, 2) and MPI.COMM_WORLD.size > 1:
+        pytest.skip("3D P2 serially only (45 s a pair): the ranks' answer equals the serial "
+                    "one, test_ranks_give_the_serial_answer")
     h = MESH_SIZE[dim, degree]
     mesh = mesh_dir / f"hertz{dim}d_h{h}_order{degree}.msh"
     if not MPI.COMM_WORLD.bcast(mesh.exists()):  # made for the first method, kept for the other
