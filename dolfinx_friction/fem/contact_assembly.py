@@ -106,15 +106,19 @@ class ContactAssembly:
                            == keys))
 
     def renew(self) -> None:
-        """Make the couplings of a new matrix pattern: those of the current candidates and
-        of the neighbourhood (:attr:`~dolfinx_friction.fem.pairing.ContactInteraction.
-        neighbourhood`), and, with the mortar distribution, every master node of a slave
-        node's candidate faces (and of its weights) as rows against the neighbourhood's
-        nodes, so the weights of the next increments may move within them."""
+        """Make the couplings of a new matrix pattern: the first, those of the current
+        candidates and spreads; every later one (the contact moved out of a pattern) also
+        those of the neighbourhood (:attr:`~dolfinx_friction.fem.pairing.
+        ContactInteraction.neighbourhood`) and, with the mortar distribution, every master
+        node of a slave node's candidate faces (and of its weights) as rows against the
+        neighbourhood's nodes, so that the candidates and the weights of the next
+        increments of a slide may move within them."""
         inter, d = self.interaction, self.gdim
         near = inter.neighbourhood
-        keys = [self._filled_keys(), self._keys(near.nodes, near.nodes).ravel()]
-        for spread in self._spreads():
+        keys = [self._filled_keys()]
+        if self._held is not None:
+            keys.append(self._keys(near.nodes, near.nodes).ravel())
+        for spread in self._spreads() if self._held is not None else ():
             rows = spread.nodes
             if spread is inter.mortar:
                 c = inter.candidates
