@@ -18,8 +18,10 @@ Each scene runs with ``[[contact]] distribution = "nodal"`` (plain node-to-surfa
   increments; the block is the slave): the die's reaction along the drag.
 
 Reported: CPU seconds of the run, Newton iterations, contact CPU per iteration (search and
-pairing + evaluation and assembly, the solver's own timers), the CPU of the mortar weights
-(``MortarDistribution.update``, once per increment and per cutback), and the pressures.
+pairing + evaluation and assembly, the solver's own timers), the bulk assembly's CPU per
+iteration and the matrix patterns made (``couplings_version``), the CPU of the mortar
+weights (``MortarDistribution.update``, once per increment and per cutback), and the
+pressures.
 """
 from __future__ import annotations
 
@@ -61,14 +63,18 @@ class _WeightsClock:
 def _numbers(scene) -> tuple:
     with _WeightsClock() as clock:
         result, n = B.timed_run(scene)
+    its = max(n["newton"], 1)
     contact = n["phases"]["contact_search"] + n["phases"]["contact_assembly"]
-    return result, n, contact / max(n["newton"], 1), clock
+    n["patterns"] = sum(pair.couplings_version for pair in result.problem.pairs.values())
+    n["bulk_per_it"] = n["phases"]["bulk_assembly"] / its
+    return result, n, contact / its, clock
 
 
 def _row(label: str, distribution: str, n: dict, contact: float, clock, extra: list) -> list:
     weights = (f"{clock.cpu:.3f} ({clock.calls})" if distribution == "mortar" else "-")
     return [label, distribution, f"{n['dofs']:,}", n["newton"], f"{n['cpu']:.1f}",
-            f"{1e3 * contact:.1f}", weights, *extra]
+            f"{1e3 * contact:.1f}", f"{1e3 * n['bulk_per_it']:.1f}", n["patterns"], weights,
+            *extra]
 
 
 def patch(rows: list) -> None:
@@ -183,11 +189,14 @@ def main() -> None:
         f"* {B.machine_line(m, B.load_average())}",
         "* CPU = CPU seconds of the whole run (set-up included, mesh generation excluded); "
         "contact / it = CPU of pairing, evaluation and assembly of the contact per Newton "
-        "iteration; weights = CPU seconds of all `MortarDistribution.update` calls (their "
-        "number: one per increment, cutbacks included).",
+        "iteration; bulk / it = CPU of the bodies' Jacobian per iteration, making the "
+        "matrix included; patterns = matrix patterns made in the run (`couplings_version`); "
+        "weights = CPU seconds of all `MortarDistribution.update` calls (their number: one "
+        "per increment, cutbacks included).",
         "",
         B.table(["scene", "distribution", "dofs", "Newton its", "CPU [s]", "contact / it [ms]",
-                 "weights [s] (calls)", "result"], rows, align="llrrrrrl"),
+                 "bulk / it [ms]", "patterns", "weights [s] (calls)", "result"], rows,
+                align="llrrrrrrrl"),
         "",
         "Ironing (the soft block is the slave, the die 1000 times stiffer the master): the "
         "die's reaction along the drag with mortar weights differs from plain "

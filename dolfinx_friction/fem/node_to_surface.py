@@ -534,8 +534,8 @@ class NodeToSurface:
         ``pairing=True`` (pass ``False`` for line-search trials).  Returns True when a node
         slid past all its candidate faces, they were searched again (``search``) and the
         new couplings left the matrix's pattern: make the matrix again
-        (:func:`create_matrix`).  Without
-        ``search`` such a node keeps the face it misses least.
+        (:func:`create_matrix`).  Without ``search`` such a node keeps the face it misses
+        least.
         """
         if self._u_n is None:
             raise RuntimeError(f"{self.name}: call begin(x) at the start of the increment")
