@@ -159,7 +159,7 @@ def test_the_matrix_pattern_survives_a_slide_while_the_couplings_stay_within_it(
     """The block slid by 5.4 master faces in 12 increments (cut back to 21-24) on a longer
     foundation: a search makes the matrix again (``couplings_version``) only where the
     candidates or the mortar weights couple outside its pattern, the couplings of a wider
-    search: measured 5 renewals in 21 (nodal) and in 24 (mortar) increments on 1 rank, 12
+    search: measured 6 renewals in 21 (nodal) and in 24 (mortar) increments on 1 rank, 12
     and 14 of 21 (nodal), 10 and 13 of 24 (mortar) on 2 and 3 ranks (a rank holds the master faces near its own slave
     nodes only: at its edge the wider search sees no more than the candidates'), where
     every increment renewed it before (21 of 21); the matrix of a renewed pattern has the
