@@ -2,8 +2,9 @@
 
 :class:`ContactAssembly` turns the evaluated elements of a
 :class:`~dolfinx_friction.fem.pairing.ContactInteraction` into PETSc entries: the global dofs
-of each candidate element (made once per search), the distinct couplings the candidates
-may fill (the matrix pattern of the contact, found among node pairs) and each tangent
+of each candidate element (made once per search), the couplings the matrix pattern holds
+(found among node pairs: those of a wider search than the candidates', kept while every
+later search's candidates fill only them, :meth:`ContactAssembly.renew`) and each tangent
 entry's slot among them, the Dirichlet rows and columns left out; on quadratic slave faces
 against a rigid obstacle the blocks through which a slave node's force spreads over its
 faces (:mod:`~dolfinx_friction.fem.slave_distribution`), with the mortar distribution the
@@ -24,6 +25,21 @@ from dolfinx_friction.fem.pairing import ContactInteraction
 
 __all__ = ["ContactAssembly"]
 
+#: node-pair key ``row * _WIDTH + col`` (system node numbers below 2^31)
+_WIDTH = 1 << 31
+
+
+def _node_rows(n: int, owner: np.ndarray, node: np.ndarray) -> np.ndarray:
+    """(n, width) the distinct nodes ``node`` (m,) >= 0 of each of ``n`` owners (``owner``
+    (m,)), -1 beyond each row's end."""
+    keep = node >= 0
+    keys = np.unique(owner[keep] * _WIDTH + node[keep])
+    row, value = keys // _WIDTH, keys % _WIDTH
+    rank = np.arange(len(keys)) - np.searchsorted(row, np.arange(n))[row]
+    out = np.full((n, int(rank.max(initial=-1)) + 1), -1, dtype=np.int64)
+    out[row, rank] = value
+    return out
+
 
 class ContactAssembly:
     """Assembly of one contact pair's elements (``interaction``) into the system of the
@@ -35,8 +51,9 @@ class ContactAssembly:
         self.comm, self.gdim = interaction.comm, interaction.gdim
         self._bc_cache: tuple = ((), np.zeros(0, np.int64))
         self._dof_cache: tuple = (None,)  # (candidates, their dofs)
-        # (candidates, rows, cols, slot, sorted node-pair keys, their width)
-        self._slot_cache: tuple = (None,)
+        #: the couplings of the matrix pattern: sorted node-pair keys, global rows, cols
+        self._held: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._slot_cache: tuple = (None, None)  # (candidates, held, slot)
 
     def surface_dofs(self) -> np.ndarray:
         """Sorted global dofs of every node this rank's part of the contact can couple: its
@@ -61,37 +78,93 @@ class ContactAssembly:
             self._dof_cache = (candidates, dofs)
         return self._dof_cache[1]
 
-    def _coupling_slots(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The distinct couplings of the candidate elements (and of the stars their slave
-        forces spread over, :meth:`_spread_blocks`), made once per search: their global
-        ``rows`` and ``cols`` (m,), and ``slot`` (n_candidates, nd, nd), the index among
-        them of each entry of each candidate's tangent (-1 where a rigid obstacle's node
-        has no dofs).  Found among node pairs (gdim^2 fewer than dof pairs)."""
+    def _keys(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """(n, r, c) node-pair keys of row nodes ``rows`` (n, r) against column nodes
+        ``cols`` (n, c), -1 where either is absent (-1)."""
+        keys = rows[:, :, None] * _WIDTH + cols[:, None, :]
+        keys[(rows[:, :, None] < 0) | (cols[:, None, :] < 0)] = -1
+        return keys
+
+    def _filled_keys(self) -> np.ndarray:
+        """Node-pair keys the tangent may fill until the next search: each candidate's
+        nodes all against all, and the rows its slave force spreads over against them."""
+        c = self.interaction.candidates
+        keys = [self._keys(c.nodes, c.nodes).ravel()]
+        keys += [self._keys(s.nodes[c.slave], c.nodes).ravel() for s in self._spreads()]
+        keys = np.concatenate(keys)
+        return keys[keys >= 0]
+
+    def holds(self) -> bool:
+        """Whether the couplings of the matrix pattern (:meth:`renew`) hold every entry the
+        current candidates and spreads may fill (this rank)."""
+        if self._held is None:
+            return False
+        pairs, keys = self._held[0], self._filled_keys()
+        if not len(pairs):
+            return not len(keys)
+        return bool(np.all(pairs[np.searchsorted(pairs, keys).clip(max=len(pairs) - 1)]
+                           == keys))
+
+    def renew(self) -> None:
+        """Make the couplings of a new matrix pattern: the first, those of the current
+        candidates and spreads; every later one (the contact moved out of a pattern) also
+        those of the neighbourhood (:attr:`~dolfinx_friction.fem.pairing.
+        ContactInteraction.neighbourhood`) and, with the mortar distribution, every master
+        node of a slave node's candidate faces (and of its weights) as rows against the
+        neighbourhood's nodes, so that the candidates and the weights of the next
+        increments of a slide may move within them."""
+        inter, d = self.interaction, self.gdim
+        near = inter.neighbourhood
+        keys = [self._filled_keys()]
+        if self._held is not None:
+            keys.append(self._keys(near.nodes, near.nodes).ravel())
+        for spread in self._spreads() if self._held is not None else ():
+            rows = spread.nodes
+            if spread is inter.mortar:
+                c = inter.candidates
+                rows = _node_rows(len(rows), np.concatenate([
+                    np.repeat(c.slave, c.nodes.shape[1] - 1),
+                    np.repeat(np.arange(len(rows)), rows.shape[1])]),
+                    np.concatenate([c.nodes[:, :-1].ravel(), rows.ravel()]))
+            keys.append(self._keys(rows[near.slave], near.nodes).ravel())
+        pairs = np.unique(np.concatenate(keys))
+        pairs = pairs[pairs >= 0]
+        i = np.arange(d)
+        rows = ((pairs // _WIDTH)[:, None, None] * d + i[:, None]).repeat(d, axis=2)
+        cols = ((pairs % _WIDTH)[:, None, None] * d + i).repeat(d, axis=1)
+        self._held = (pairs, rows.ravel(), cols.ravel())
+
+    def _pair_index(self, keys: np.ndarray) -> np.ndarray:
+        """Index among the pattern's node pairs of each of ``keys`` (any shape), -1 where a
+        key is -1; refuses a key the pattern does not hold."""
+        pairs, valid = self._held[0], keys >= 0
+        at = np.searchsorted(pairs, keys).clip(max=max(len(pairs) - 1, 0))
+        if valid.any() and (not len(pairs) or np.any(valid & (pairs[at] != keys))):
+            raise RuntimeError(f"{self.name}: a contact coupling outside the matrix pattern "
+                               f"(internal error: renew() was not called after a search)")
+        return np.where(valid, at, -1)
+
+    def _entry_slots(self, pair: np.ndarray) -> np.ndarray:
+        """(n, r * d, c * d) indices among :meth:`couplings` of the entries of blocks whose
+        node pairs have the indices ``pair`` (n, r, c) (-1: absent)."""
+        d, (n, r, c) = self.gdim, pair.shape
+        i = np.arange(d)
+        slot = (pair[:, :, None, :, None] * d * d + i[:, None, None] * d + i).reshape(
+            n, r * d, c * d)
+        slot[np.broadcast_to(pair[:, :, None, :, None] < 0, (n, r, d, c, d)).reshape(
+            slot.shape)] = -1
+        return slot
+
+    def _coupling_slots(self) -> np.ndarray:
+        """(n_candidates, nd, nd) the index among :meth:`couplings` of each entry of each
+        candidate's tangent (-1 where a rigid obstacle's node has no dofs); made once per
+        search (and pattern)."""
         candidates = self.interaction.candidates
-        if self._slot_cache[0] is not candidates:
-            nodes, d = candidates.nodes, self.gdim
-            n, k = nodes.shape
-            a = np.broadcast_to(nodes[:, :, None], (n, k, k))
-            b = np.broadcast_to(nodes[:, None, :], (n, k, k))
-            valid = (a >= 0) & (b >= 0)
-            spread = [s.pattern(candidates.slave, nodes) for s in self._spreads()]
-            star_rows = np.concatenate([np.zeros(0, np.int64)] + [r for r, _ in spread])
-            star_cols = np.concatenate([np.zeros(0, np.int64)] + [c for _, c in spread])
-            width = int(max(nodes.max(initial=0), star_rows.max(initial=0))) + 1
-            keys = a[valid] * width + b[valid]
-            pairs, inverse = np.unique(np.concatenate([keys, star_rows * width + star_cols]),
-                                       return_inverse=True)
-            pair = np.full((n, k, k), -1, dtype=np.int64)
-            pair[valid] = inverse[: len(keys)]
-            i = np.arange(d)
-            # entry (node alpha, component i; node beta, component j) of a candidate's tangent
-            slot = (pair[:, :, None, :, None] * d * d + i[:, None, None] * d + i).reshape(
-                n, k * d, k * d)
-            slot[np.repeat(np.repeat(pair < 0, d, axis=1), d, axis=2)] = -1
-            rows = ((pairs // width)[:, None, None] * d + i[:, None]).repeat(d, axis=2)
-            cols = ((pairs % width)[:, None, None] * d + i).repeat(d, axis=1)
-            self._slot_cache = (candidates, rows.ravel(), cols.ravel(), slot, pairs, width)
-        return self._slot_cache[1:4]
+        if self._slot_cache[0] is not candidates or self._slot_cache[1] is not self._held:
+            nodes = candidates.nodes
+            slot = self._entry_slots(self._pair_index(self._keys(nodes, nodes)))
+            self._slot_cache = (candidates, self._held, slot)
+        return self._slot_cache[2]
 
     def _node_dofs(self, nodes: np.ndarray, bcs: Sequence = ()) -> np.ndarray:
         """(n, m * gdim) global dofs of the nodes ``nodes`` (n, m), -1 for nodes < 0 and for
@@ -154,17 +227,7 @@ class ContactAssembly:
         """(n, r * d, c * d) indices among :meth:`couplings` of a block's entries (row nodes
         ``rows`` (n, r), column nodes ``cols`` (n, c)), -1 for absent nodes and for the rows
         and columns of ``bcs``."""
-        self._coupling_slots()
-        pairs, width = self._slot_cache[4:]
-        d = self.gdim
-        keys = rows[:, :, None] * width + cols[:, None, :]
-        pair = np.searchsorted(pairs, keys).clip(max=max(len(pairs) - 1, 0))
-        pair[(rows[:, :, None] < 0) | (cols[:, None, :] < 0)] = -1
-        i = np.arange(d)
-        slot = (pair[:, :, None, :, None] * d * d + i[:, None, None] * d + i).reshape(
-            len(rows), rows.shape[1] * d, cols.shape[1] * d)
-        slot[np.broadcast_to(pair[:, :, None, :, None] < 0, (*pair.shape[:2], d, pair.shape[2],
-                                                               d)).reshape(slot.shape)] = -1
+        slot = self._entry_slots(self._pair_index(self._keys(rows, cols)))
         masked = (self._node_dofs(rows, bcs)[:, :, None] < 0) | \
             (self._node_dofs(cols, bcs)[:, None, :] < 0)
         slot[masked] = -1
@@ -248,16 +311,17 @@ class ContactAssembly:
 
     def couplings(self) -> tuple[np.ndarray, np.ndarray]:
         """Global ``(rows, cols)`` of every entry the contact tangent may fill until the
-        next search (each candidate element's dofs, all against all), each once."""
-        rows, cols, _ = self._coupling_slots()
-        return rows, cols
+        pattern is renewed (:meth:`renew`), each once."""
+        if self._held is None:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return self._held[1], self._held[2]
 
     def coupling_values(self, bcs: Sequence = ()) -> np.ndarray:
         """Tangent values in the order of :meth:`couplings`: the sum of the elements'
         entries (0 where no element couples, and in the rows and columns of ``bcs``)."""
         el = self._evaluated()
-        rows, _, slot = self._coupling_slots()
-        slot = slot[el.candidate]
+        rows, _ = self.couplings()
+        slot = self._coupling_slots()[el.candidate]
         K = self._own_part(el)[1].reshape(slot.shape)
         masked = self._masked_dofs(bcs)[el.candidate] < 0
         keep = (slot >= 0) & ~(masked[:, :, None] | masked[:, None, :])

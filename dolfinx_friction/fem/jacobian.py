@@ -2,9 +2,9 @@
 and the caches that make filling it again cheap.
 
 The bodies' Jacobians are joined in one COO pattern (:class:`~dolfinx_friction.fem.pattern.
-CooPattern`) in the block numbering; each search that changes the contact couplings extends
-it to a new matrix, which carries the block size and the bodies' rigid-body modes as near
-null space (for algebraic multigrid).  Filling the matrix at an iterate writes the bulk
+CooPattern`) in the block numbering; each new pattern of the contact couplings
+(``couplings_version``) extends it to a new matrix, which carries the block size and the
+bodies' rigid-body modes as near null space (for algebraic multigrid).  Filling the matrix at an iterate writes the bulk
 values (assembled once for linear bodies), the constrained rows (and, for a symmetric
 solve, columns) as identity, and the contacts' tangents over it; every cache is kept while
 the very objects it was made from (pattern, values, constrained rows) are the same.

@@ -67,10 +67,9 @@ class MortarDistribution(SpreadRows):
         #: at the increment's start) hands its force over as with the nodal distribution
         self.covered = np.zeros(len(slaves), dtype=bool)
 
-    def update(self, x_slave: np.ndarray, x_master: np.ndarray) -> bool:
+    def update(self, x_slave: np.ndarray, x_master: np.ndarray) -> None:
         """The weights with the slave body's local nodes at ``x_slave`` (n_local, gdim) and
-        the held master faces' nodes at ``x_master`` (n_faces, nn_m, gdim) (collective).
-        Returns whether the nodes the forces reach changed on this rank."""
+        the held master faces' nodes at ``x_master`` (n_faces, nn_m, gdim) (collective)."""
         xs = x_slave[self._facet_nodes]
         xm, m_sys = self._near_master_faces(xs, x_master)
         s, m = _facing_pairs(self.face, xs, self.master.face, xm)
@@ -90,10 +89,8 @@ class MortarDistribution(SpreadRows):
         k = np.concatenate([r[0] for r in received]).astype(np.int64)
         j = np.concatenate([r[1] for r in received]).astype(np.int64)
         value = np.concatenate([r[2] for r in received])
-        before = self.nodes
         self.nodes, self.weights = _rows(self._slaves, k, j, value)
         self.covered = self.weights.sum(axis=1) > 0.0
-        return not np.array_equal(before, self.nodes)
 
     def _near_master_faces(self, xs: np.ndarray, x_master: np.ndarray
                            ) -> tuple[np.ndarray, np.ndarray]:

@@ -523,8 +523,8 @@ class NodeToSurface:
         self._saved = self._interaction.save()
         self._load_fields(self._u_n)
         self._interaction.measure_areas()
-        moved = self._measure_mortar()
-        self._search(x, True, moved)
+        self._measure_mortar()
+        self._search(x, True)
         self._iteration = 0
 
     def update(self, x: PETSc.Vec, pairing: bool = True, search: bool = True) -> bool:
@@ -532,26 +532,26 @@ class NodeToSurface:
 
         Pairing happens in the first ``pairing_iterations`` calls of an increment with
         ``pairing=True`` (pass ``False`` for line-search trials).  Returns True when a node
-        slid past all its candidate faces and they were searched again (``search``): the
-        couplings changed, make the matrix again (:func:`create_matrix`).  Without
-        ``search`` such a node keeps the face it misses least.
+        slid past all its candidate faces, they were searched again (``search``) and the
+        new couplings left the matrix's pattern: make the matrix again
+        (:func:`create_matrix`).  Without ``search`` such a node keeps the face it misses
+        least.
         """
         if self._u_n is None:
             raise RuntimeError(f"{self.name}: call begin(x) at the start of the increment")
-        inter, changed = self._interaction, False
+        inter, searched, changed = self._interaction, False, False
         evaluated = inter.elements
         if pairing and self._iteration < inter.pairing_iterations:
             inter.pair(x, self._iteration)
             if (search and self._iteration > 0
                     and self.comm.allreduce(int(inter.needs_search()))):
-                self._search(x, first=False)
+                searched, changed = True, self._search(x, first=False)
                 inter.pair(x, self._iteration)
-                changed = True
             inter.mark_off_surface()
         if pairing:
             self._iteration += 1
         values = x.getArray(readonly=True)
-        if not changed and self._same_evaluation(evaluated, values):
+        if not searched and self._same_evaluation(evaluated, values):
             inter.elements = evaluated  # paired as before at the same iterate: keep it
             return False
         inter.evaluate(x, self._u_n, self.ramp)
@@ -607,29 +607,30 @@ class NodeToSurface:
                 self.layout.owned_slice(f.block, self.gdim)]
             compat.scatter_forward(f.u)
 
-    def _measure_mortar(self) -> bool:
-        """The mortar weights on the bodies as loaded (:meth:`_load_fields`): whether the
-        master nodes they reach changed on this rank (False without mortar weights)."""
+    def _measure_mortar(self) -> None:
+        """The mortar weights on the bodies as loaded (:meth:`_load_fields`), if any."""
         mortar = self._interaction.mortar
         if mortar is None:
-            return False
+            return
         x = [f.X + f.u.x.array.reshape(-1, self.gdim)[: len(f.X)]
              for f in (self._slave_field, self._master_field)]
-        return mortar.update(x[0], x[1][self._interaction.master.local])
+        mortar.update(x[0], x[1][self._interaction.master.local])
 
-    def _search(self, x: PETSc.Vec, first: bool, moved: bool = False) -> None:
-        """Search the candidates at ``x`` (``moved``: the mortar weights reach other master
-        nodes on this rank: the couplings change too)."""
-        before = self._interaction.candidates.nodes
+    def _search(self, x: PETSc.Vec, first: bool) -> bool:
+        """Search the candidates at ``x``; a new matrix pattern (:attr:`couplings_version`)
+        where the current one misses couplings of the candidates or of the mortar weights
+        on some rank (collective).  Returns whether the pattern changed."""
         self._load_fields(x)
         master_u = None
         if self._master_field is not None:
             f = self._master_field
             master_u = f.u.x.array.reshape(-1, self.gdim)[self._interaction.master.local]
         self._interaction.search(x, master_u, first)
-        same = not moved and np.array_equal(before, self._interaction.candidates.nodes)
-        if self.comm.allreduce(0 if same else 1):
-            self.couplings_version += 1
+        if not self.comm.allreduce(0 if self._assembly.holds() else 1):
+            return False
+        self._assembly.renew()
+        self.couplings_version += 1
+        return True
 
     # ------------------------------------------------------------- assembly
     def surface_dofs(self) -> np.ndarray:

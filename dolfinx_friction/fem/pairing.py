@@ -166,6 +166,11 @@ FACE_SLACK = 1e-3
 #: A slave node that projects inside no face (near a convex edge of a faceted master)
 #: takes the nearest face it misses by at most this parametric distance.
 EDGE_SLACK = 0.05
+#: Candidate master faces per slave node (the nearest centroids), by dimension.
+CANDIDATES = {2: 6, 3: 16}
+#: Faces per slave node of the wider search whose couplings a matrix pattern holds
+#: (:attr:`ContactInteraction.neighbourhood`): one face more on every side.
+NEIGHBOURHOOD = {2: 10, 3: 36}
 #: Ties in pairing: a node this close (parametric) to a face's edge projects inside it,
 #: and clearances that differ by less than this times the node spacing are equal; ties go
 #: to the face whose reference centroid (rounded to 1e3 TIE spacings) comes first (x, y,
@@ -202,6 +207,10 @@ class ContactInteraction:
         self.elements = Elements(*(np.zeros(0, int),) * 2, np.zeros((0, 2), int),
                                  *(np.zeros(0, int),) * 2)
         self.candidates = _Candidates(np.zeros(0, int), np.zeros(0, int), np.zeros((0, 2), int))
+        #: the candidates of a wider search at the last search (every candidate among them):
+        #: the couplings a matrix pattern is made for, so that it serves the searches of the
+        #: next increments of a slide while their candidates stay among these
+        self.neighbourhood = self.candidates
         self._faces: Optional[tuple[np.ndarray, np.ndarray]] = None  # received (nodes, X)
         self._face_ids = np.zeros(0, dtype=np.int64)  # global ids of the received faces
         self._centroids = np.zeros((0, gdim))  # their reference centroids (ties in pairing)
@@ -281,6 +290,7 @@ class ContactInteraction:
                                 else NodeValues(u, np.array([node]), self.gdim))
             self.candidates = _Candidates(np.arange(n), np.full(n, -1), np.stack(
                 [np.full(n, -1 if node is None else node), self.slaves.nodes], axis=1))
+            self.neighbourhood = self.candidates
             return
         keys, xi = self._candidate_keys(), self._xi
         x_s = self.slaves.X + self._slave_gather(u)
@@ -290,9 +300,12 @@ class ContactInteraction:
         self.exchange.faces = len(face_nodes)
         self.exchange.gathered = self._slave_gather.remote + self._gather.remote
         x_f = X_f + self._gather(u).reshape(X_f.shape)
-        slave, face = _nearest_faces(x_s, x_f, 16 if self.gdim == 3 else 6)
+        slave, face = _nearest_faces(x_s, x_f, CANDIDATES[self.gdim])
         nodes = np.concatenate([face_nodes[face], self.slaves.nodes[slave, None]], axis=1)
         self.candidates = _Candidates(slave, face, nodes)
+        near_slave, near = _nearest_faces(x_s, x_f, NEIGHBOURHOOD[self.gdim])
+        self.neighbourhood = _Candidates(near_slave, near, np.concatenate(
+            [face_nodes[near], self.slaves.nodes[near_slave, None]], axis=1))
         # a candidate kept by the search starts from its last projection point
         self._xi = np.tile(self.master.face.centroid, (len(slave), 1))
         _, new, old = np.intersect1d(self._candidate_keys(), keys, assume_unique=True,

@@ -17,8 +17,8 @@ from petsc4py import PETSc
 
 #: the attribute of a serial matrix that holds the array PETSc stores its values in
 _VALUES = "dolfinx_friction_values"
-#: the attribute of a serial matrix filled by :meth:`CooPattern.fill_over`: (base, slots,
-#: the matrix's state after that fill)
+#: the attribute of a matrix filled by :meth:`CooPattern.fill_over`: (base, slots, the
+#: matrix's state after that fill)
 _BASE = "dolfinx_friction_base"
 
 
@@ -195,19 +195,26 @@ class CooPattern:
 
     def fill_over(self, A: PETSc.Mat, base: np.ndarray, slots: np.ndarray,
                   values: np.ndarray) -> None:
-        """Overwrite the values of ``A`` with CSR ``base``, except ``values`` at ``slots``.
-        In serial, where ``A`` is unchanged since its last such fill with the same ``base``
-        and ``slots`` objects, only ``slots`` are written."""
+        """Overwrite the values of ``A`` with CSR ``base``, except ``values`` at ``slots``
+        (sorted).  Where ``A`` is unchanged since its last such fill with the same ``base``
+        and ``slots`` objects, only ``slots`` are written: in place in serial, by
+        ``MatSetValues`` into this rank's rows under MPI (no copy of the local matrix)."""
+        last = A.getAttr(_BASE)
+        kept = (last is not None and last[0] is base and last[1] is slots
+                and last[2] == A.stateGet())
         held = A.getAttr(_VALUES)
-        if held is None:
+        if held is not None:
+            if not kept:
+                held[:] = base
+            held[slots] = values
+        elif kept:
+            rows, counts = np.unique(self._row_of_slot[slots], return_counts=True)
+            A.setValuesIJV(np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType),
+                           self.indices[slots], np.asarray(values, dtype=PETSc.ScalarType),
+                           rowmap=(rows + self.start).astype(PETSc.IntType))
+        else:
             data = base.copy()
             data[slots] = values
             A.setValuesCSR(self.indptr, self.indices, data)
-            A.assemble()
-            return
-        last = A.getAttr(_BASE)
-        if last is None or last[0] is not base or last[1] is not slots or last[2] != A.stateGet():
-            held[:] = base
-        held[slots] = values
-        A.assemble()
+        A.assemble()  # also tells PETSc the values changed (a factorisation is redone)
         A.setAttr(_BASE, (base, slots, A.stateGet()))

@@ -37,15 +37,6 @@ class SpreadRows:
     nodes: np.ndarray
     weights: np.ndarray
 
-    def pattern(self, slave: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Node pairs (rows, cols), each (m,), that elements of the slave nodes ``slave``
-        (n,) with nodes ``cols`` (n, c) (-1: none) couple through these rows."""
-        rows = self.nodes[slave]
-        r = np.broadcast_to(rows[:, :, None], rows.shape + cols.shape[1:])
-        c = np.broadcast_to(cols[:, None, :], r.shape)
-        keep = (r >= 0) & (c >= 0)
-        return r[keep], c[keep]
-
     def spread(self, slave: np.ndarray, force: np.ndarray, tangent: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """These rows of elements of the slave nodes ``slave`` (n,) whose slave-node force
