@@ -42,11 +42,12 @@ BLOCK = (20.0, 10.0)  # quarter-block side, depth
 
 def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
                h_far: float = 3.0, master_ratio: float = 2.0,
-               refine_radius: float = 1.8) -> None:
+               refine_radius: float = 1.8, order: int = 1) -> None:
     """Eighth of a sphere (and optionally a quarter block under it), refined tetrahedra.
 
     ``h_contact``: sphere element size within ``refine_radius`` of the pole
-    (the block's is ``master_ratio`` times larger); ``h_far``: size far away.
+    (the block's is ``master_ratio`` times larger); ``h_far``: size far away;
+    ``order``: geometric order (2: mid-edge nodes on the sphere, for ``degree = 2``).
     """
     with G.gmsh_model("hertz_sphere") as gmsh:
         occ = gmsh.model.occ
@@ -102,6 +103,7 @@ def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
         gmsh.option.setNumber("Mesh.Algorithm", 6)
         gmsh.option.setNumber("Mesh.Algorithm3D", 1)
         gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(order)
         G.write_msh(path, binary=True)
 
 
