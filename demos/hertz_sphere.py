@@ -107,9 +107,18 @@ def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
         G.write_msh(path, binary=True)
 
 
+def quadratic(overrides: list[str]) -> bool:
+    """Whether ``--set`` asks for quadratic bodies (``body.N.degree=2``)."""
+    return any(o.replace(" ", "").startswith("body.") and o.replace(" ", "").endswith(
+        ".degree=2") for o in overrides)
+
+
 def main(argv=None) -> None:
     args, scene = C.command_line(__doc__, SCENE, argv)
     mesh, resolution = MESHES.get(scene.name, MESHES["hertz_sphere.toml"])
+    if quadratic(args.set):  # P2 wants the mid-side nodes on the sphere, not on its chords
+        mesh, resolution = mesh.with_name(f"{mesh.stem}_order2.msh"), {**resolution, "order": 2}
+        args.set = [*args.set, f'mesh.file="{mesh}"']
     with_block = resolution["with_block"]
     result = C.run_demo(args, scene, mesh, build_mesh, **resolution)
     name = scene.stem
