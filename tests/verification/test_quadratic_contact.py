@@ -3,7 +3,9 @@
 A quarter disk (2D, 3-node edges) and a quarter of a lower hemisphere (3D, T6 faces),
 R = 10, E = 1000, nu = 0.3, of second-order geometry (mid-side nodes on the circle or
 sphere; theory §2.1 explains why not first-order), pressed onto a rigid plane in one
-increment, frictionless, every contact setting at its default.  The nodal pressures
+increment, frictionless, every contact setting at its default; and onto an elastic block
+of the same material, P2 too (Hertz with E* of the two bodies; the default distribution
+there is the mortar one, theory §2.1).  The nodal pressures
 ``F_N / A_k`` of every slave node within 0.8 a are compared with Hertz's profile for the
 measured load.  Each bound is the issue's target; the measured values (serial, this mesh)
 are in the tests' docstrings.  Coarser meshes than the demos' (2D: a/h = 18; 3D:
