@@ -3,7 +3,8 @@
 Two blocks of one material (E = 1000) stacked on a flat interface at height 0.5
 (``reference.meshes.stacked``, footprint 1 x 1), a pressure 1 on the upper block's top,
 every contact setting at its default but ``distribution`` (default: ``"mortar"`` for P2,
-``"nodal"`` for P1); the upper block's bottom is the slave.  The exact solution is a uniform stress: pressure 1 at every slave node.
+``"nodal"`` for P1); the upper block's bottom is the slave.  The exact solution is a
+uniform stress: pressure 1 at every slave node.
 
 Frictionless (nu = 0.3): the lower block on rollers at its bottom, both on rollers on their
 sides x = 0 (and y = 0).  With friction (nu = 0, mu = 0.3, the lower block clamped at its
