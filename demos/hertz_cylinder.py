@@ -35,12 +35,12 @@ BLOCK = (30.0, 20.0)  # half width, depth
 
 
 def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
-               master_ratio: float = 2.0, refine_radius: float = 2.5) -> None:
+               master_ratio: float = 2.0, refine_radius: float = 2.5, order: int = 1) -> None:
     """Quarter disk over a half block, quadrilaterals refined near the origin.
 
     ``h_contact``: cylinder element size within ``refine_radius`` of the first
     contact point (the block's is ``master_ratio`` times larger); ``h_far``:
-    size far away.
+    size far away; ``order``: geometric order (2: mid-side nodes on the arc).
     """
     with G.gmsh_model("hertz_cylinder") as gmsh:
         geo = gmsh.model.geo
@@ -75,6 +75,7 @@ def build_mesh(path: Path, h_contact: float = 0.05, h_far: float = 2.5,
         G.physical_group(1, [b_bottom], "block_bottom")
         G.physical_group(1, [b_sym], "block_symmetry")
         gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.setOrder(order)
         G.write_msh(path)
 
 

@@ -42,11 +42,12 @@ BLOCK = (20.0, 10.0)  # quarter-block side, depth
 
 def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
                h_far: float = 3.0, master_ratio: float = 2.0,
-               refine_radius: float = 1.8) -> None:
+               refine_radius: float = 1.8, order: int = 1) -> None:
     """Eighth of a sphere (and optionally a quarter block under it), refined tetrahedra.
 
     ``h_contact``: sphere element size within ``refine_radius`` of the pole
-    (the block's is ``master_ratio`` times larger); ``h_far``: size far away.
+    (the block's is ``master_ratio`` times larger); ``h_far``: size far away;
+    ``order``: geometric order (2: mid-edge nodes on the sphere, for ``degree = 2``).
     """
     with G.gmsh_model("hertz_sphere") as gmsh:
         occ = gmsh.model.occ
@@ -102,12 +103,22 @@ def build_mesh(path: Path, with_block: bool = False, h_contact: float = 0.15,
         gmsh.option.setNumber("Mesh.Algorithm", 6)
         gmsh.option.setNumber("Mesh.Algorithm3D", 1)
         gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(order)
         G.write_msh(path, binary=True)
+
+
+def quadratic(overrides: list[str]) -> bool:
+    """Whether ``--set`` asks for quadratic bodies (``body.N.degree=2``)."""
+    return any(o.replace(" ", "").startswith("body.") and o.replace(" ", "").endswith(
+        ".degree=2") for o in overrides)
 
 
 def main(argv=None) -> None:
     args, scene = C.command_line(__doc__, SCENE, argv)
     mesh, resolution = MESHES.get(scene.name, MESHES["hertz_sphere.toml"])
+    if quadratic(args.set):  # P2 wants the mid-side nodes on the sphere, not on its chords
+        mesh, resolution = mesh.with_name(f"{mesh.stem}_order2.msh"), {**resolution, "order": 2}
+        args.set = [*args.set, f'mesh.file="{mesh}"']
     with_block = resolution["with_block"]
     result = C.run_demo(args, scene, mesh, build_mesh, **resolution)
     name = scene.stem

@@ -41,6 +41,14 @@ METHODS = ("penalty", "augmented")
 #: face's shape functions at the node's projection (node-to-surface), "mortar" with the
 #: mortar weights of the slave faces around the node (docs/theory.md §2.4)
 DISTRIBUTIONS = ("nodal", "mortar")
+
+
+def default_distribution(quadratic: bool, rigid: bool, axisymmetric: bool) -> str:
+    """The distribution of a contact that gives none: ``"mortar"`` for quadratic slave
+    faces on a deformable master (the patch test and pointwise pressures: docs/theory.md
+    §2.1), ``"nodal"`` otherwise (a rigid master has one node; an axisymmetric body's
+    quadratic faces pass the patch test with neither, §2.4)."""
+    return "mortar" if quadratic and not rigid and not axisymmetric else "nodal"
 #: augmented Lagrangian updates an increment may take; one that needs more is cut back (a
 #: Uzawa update divides the violation by about 1 + K / (the structure's stiffness at a
 #: node): 2-4 updates at the default K)
@@ -163,7 +171,7 @@ class ContactSettings:
     method: str = "penalty"  # one of METHODS
     #: "augmented": the largest overclosure and stick slip left, per slave node spacing
     augmented_tolerance: float = 1e-4
-    distribution: str = "nodal"  # one of DISTRIBUTIONS
+    distribution: str | None = None  # one of DISTRIBUTIONS; None: default_distribution
 
     def __post_init__(self) -> None:
         validate(self, RULES)

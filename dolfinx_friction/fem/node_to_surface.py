@@ -44,14 +44,16 @@ from dolfinx_friction.contact.laws import Exponential, Law, Linear, Tabular
 from dolfinx_friction.errors import ContactSetupError
 from dolfinx_friction.fem.axisymmetric import section_fault
 from dolfinx_friction.fem.contact_assembly import ContactAssembly
-from dolfinx_friction.fem.contact_settings import CALCULIX, ContactSettings
+from dolfinx_friction.contact.slave_weights import is_quadratic
+from dolfinx_friction.fem.contact_settings import CALCULIX, ContactSettings, default_distribution
+from dolfinx_friction.fem.faceting import mid_side_depths
 from dolfinx_friction.fem.mortar_distribution import MortarDistribution
 from dolfinx_friction.fem.numbering import BodyField, DofLayout
 from dolfinx_friction.fem.obstacles import (  # noqa: F401  (rigid_*: re-exported)
     Obstacle, SignedDistance, _vector, rigid_cylinder, rigid_plane, rigid_sdf, rigid_sphere,
     rotation_size)
 from dolfinx_friction.fem.pairing import ContactInteraction, Exchange, RigidMaster
-from dolfinx_friction.fem.surfaces import SlaveNodes, master_faces
+from dolfinx_friction.fem.surfaces import SlaveNodes, face_type_of, master_faces
 from dolfinx_friction.fem.tagged_mesh import BodyMesh
 from dolfinx_friction.rules import SceneError, modulus
 
@@ -214,12 +216,15 @@ class NodeToSurface:
         sticking nodes are below ``augmented_tolerance`` (default 1e-4) times the slave
         node spacing, K and lambda unchanged (docs/theory.md §6.5).
     distribution : str
-        How a slave node's force reaches a deformable master's nodes: ``"nodal"`` (default)
-        with the master face's shape functions at the node's projection, ``"mortar"`` with
+        How a slave node's force reaches a deformable master's nodes: ``"nodal"`` with the
+        master face's shape functions at the node's projection, ``"mortar"`` with
         mortar weights over the slave faces around the node, measured at the start of each
         increment (docs/theory.md §2.4: the contact patch test on non-matching meshes;
         quadratic slave faces then spread their nodes' forces over the faces as on a rigid
-        obstacle, §2.1; nothing changes against a rigid obstacle).
+        obstacle, §2.1; nothing changes against a rigid obstacle).  Default (None):
+        ``"mortar"`` for quadratic slave faces on a deformable master (not axisymmetric),
+        ``"nodal"`` otherwise (:func:`~dolfinx_friction.fem.contact_settings.
+        default_distribution`).
     obstacle_index, n_obstacles : int
         For a rigid obstacle whose translation is an unknown of a
         :class:`~dolfinx_friction.BlockProblem` with ``obstacles=n_obstacles`` (force- or
@@ -249,7 +254,7 @@ class NodeToSurface:
                  tangent: str = "consistent", thickness: float = 1.0,
                  axisymmetric: bool = False,
                  pairing_iterations: int = 8, method: str = "penalty",
-                 augmented_tolerance: float = 1e-4, distribution: str = "nodal",
+                 augmented_tolerance: float = 1e-4, distribution: Optional[str] = None,
                  name: str = "contact",
                  obstacle_index: Optional[int] = None, n_obstacles: int = 0,
                  body_names: tuple[str, str] = ("slave", "master")):
@@ -305,9 +310,16 @@ class NodeToSurface:
             master_side = master_faces(self._master_field, "master")
         # quadratic slave faces spread their nodes' forces on rigid obstacles, and with the
         # mortar distribution (§2.1, §2.4)
+        if given.distribution is None:
+            given = replace(given, distribution=default_distribution(
+                is_quadratic(face_type_of(slave_field)), rigid, axisymmetric))
         by_mortar = given.distribution == "mortar" and not rigid
         slaves = SlaveNodes(slave_field, "slave", subfaces=rigid or by_mortar)
         self._slave_field = slave_field
+        #: (n,) how deep the mid-side nodes lie inside a curved surface of first-order
+        #: geometry [length]; None on other meshes and faces (§2.1)
+        self._chord_depth = mid_side_depths(slave_field, slaves.face, slaves.facet_nodes,
+                                            slaves.local)
         # a node's area sums its faces' shares in an order that depends on the partition:
         # 12 digits make h, and the defaults scaled with it, the same on any number of ranks
         self.spacing = float(f"{np.median(np.concatenate(comm.allgather(slaves.spacing))):.12g}")
@@ -737,6 +749,18 @@ class NodeToSurface:
         """Largest overclosure the law acts on, relative to the slave node spacing, over all
         ranks (collective): a penalty too soft for the mesh shows here."""
         return self.comm.allreduce(self._interaction.penetration(), op=MPI.MAX)
+
+    def faceting(self) -> tuple[float, float]:
+        """Quadratic slave faces on a mesh of first-order geometry: the largest chord depth
+        ``h^2/8R`` of the closed slave nodes' mid-side nodes [length] and its ratio to the
+        largest overclosure, over all ranks (collective); (0, 0) on other meshes or with
+        nothing closed.  The vertex nodes carry about that ratio more pressure (§2.1)."""
+        if self._chord_depth is None:
+            return 0.0, 0.0
+        depth, over = self._interaction.closed_depth(self._chord_depth)
+        depth = self.comm.allreduce(depth, op=MPI.MAX)
+        over = self.comm.allreduce(over, op=MPI.MAX)
+        return depth, (depth / over if over > 0.0 else 0.0)
 
     def detached(self) -> int:
         """Slave nodes closed at the last commit that slid off the master surface in this

@@ -581,6 +581,17 @@ class ContactInteraction:
             return 0.0
         return float(np.max(-(r.g_N + self._gap_offset) / self.slaves.spacing[self.elements.slave]))
 
+    def closed_depth(self, depth: np.ndarray) -> tuple[float, float]:
+        """The largest of ``depth`` (n_slaves,) over the closed slave nodes and their largest
+        overclosure the law acts on (absolute), on this rank; (0, 0) with none closed."""
+        r = self.elements.result
+        if r is None or len(r.g_N) == 0:
+            return 0.0, 0.0
+        closed = r.status != OPEN
+        over = -(r.g_N + self._gap_offset)[closed]
+        return (float(depth[self.elements.slave[closed]].max(initial=0.0)),
+                float(over.max(initial=0.0)))
+
     def detached(self) -> int:
         """Nodes on this rank that were closed at the last commit and project onto no
         master face even after a search in this increment: they slid off the master

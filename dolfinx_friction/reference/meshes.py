@@ -6,7 +6,7 @@ are dimensionless.  Meridian sections of axisymmetric bodies (r = x >= 0, z = y)
 :func:`thick_cylinders`, :func:`sphere_section`, :func:`ring_section`.  The CalculiX
 comparisons' meshes: :func:`blocks_on_foundation`, :func:`ironing` (with their scenes in
 :mod:`dolfinx_friction.reference.cases`); Hertz contact on a rigid plane:
-:func:`quarter_disk`, :func:`quarter_sphere`.
+:func:`quarter_disk`, :func:`quarter_sphere` (also on an elastic block).
 """
 from __future__ import annotations
 
@@ -383,17 +383,30 @@ def _graded(h_contact: float, h_far: float, refine_radius: float, growth: float)
 
 def quarter_disk(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: float = 2.0,
                  refine_radius: float = 1.0, growth: float = 0.25, order: int = 1,
+                 block: Optional[tuple[float, float]] = None,
                  comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
     """Quarter disk ``x >= 0``, centre ``(0, R)``, touching ``y = 0`` at the origin;
     quadrilaterals graded from the origin (:func:`quarter_sphere`'s sizes), of geometric
     ``order`` 1 or 2 (2: mid-side nodes on the arc).  Groups: body ``cylinder``; edges
     ``cylinder_surface`` (the arc), ``cylinder_top`` (``y = R``), ``cylinder_symmetry``
-    (``x = 0``) -- as ``demos/hertz_cylinder.py``'s."""
+    (``x = 0``) -- as ``demos/hertz_cylinder.py``'s.  ``block = (W, D)``: also a block
+    ``[0, W] x [-D, 0]`` under it (no node shared, the same sizes), body ``block``, edges
+    ``block_top``, ``block_bottom``, ``block_symmetry`` (``x = 0``)."""
     def build():
         geo = gmsh.model.geo
         c, p0, p1 = geo.addPoint(0, R, 0), geo.addPoint(0, 0, 0), geo.addPoint(R, R, 0)
         arc, top, sym = geo.addCircleArc(p0, c, p1), geo.addLine(p1, c), geo.addLine(c, p0)
         disk = geo.addPlaneSurface([geo.addCurveLoop([arc, top, sym])])
+        groups = [(2, [disk], "cylinder"), (1, [arc], "cylinder_surface"),
+                  (1, [top], "cylinder_top"), (1, [sym], "cylinder_symmetry")]
+        if block is not None:
+            W, D = block
+            q = [geo.addPoint(0, 0, 0), geo.addPoint(0, -D, 0), geo.addPoint(W, -D, 0),
+                 geo.addPoint(W, 0, 0)]
+            edges = [geo.addLine(q[i], q[(i + 1) % 4]) for i in range(4)]  # x=0, bottom, x=W, top
+            under = geo.addPlaneSurface([geo.addCurveLoop(edges)])
+            groups += [(2, [under], "block"), (1, [edges[3]], "block_top"),
+                       (1, [edges[1]], "block_bottom"), (1, [edges[0]], "block_symmetry")]
         geo.synchronize()
         _graded(h_contact, h_far, refine_radius, growth)
         for key, value in (("Mesh.Algorithm", 6), ("Mesh.RecombineAll", 1),
@@ -401,14 +414,14 @@ def quarter_disk(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: flo
             gmsh.option.setNumber(key, value)
         gmsh.model.mesh.generate(2)
         gmsh.model.mesh.setOrder(order)
-        for dim, tags, name in ((2, [disk], "cylinder"), (1, [arc], "cylinder_surface"),
-                                (1, [top], "cylinder_top"), (1, [sym], "cylinder_symmetry")):
+        for dim, tags, name in groups:
             group(dim, tags, name)
     return write_model(build, path, comm)
 
 
 def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: float = 2.0,
                    refine_radius: float = 1.0, growth: float = 0.25, order: int = 1,
+                   block: Optional[tuple[float, float]] = None,
                    comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
     """Quarter of the lower hemisphere ``x, y >= 0``, centre ``(0, 0, R)``, touching
     ``z = 0`` at the origin: tetrahedra of size ``h_contact`` within ``refine_radius`` of
@@ -416,10 +429,13 @@ def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: f
     1 or 2 (2: mid-edge nodes on the sphere).  Groups: body ``sphere``; facets
     ``sphere_surface`` (the curved surface), ``sphere_top`` (``z = R``),
     ``sphere_symmetry_x`` (``x = 0``), ``sphere_symmetry_y`` (``y = 0``) -- as
-    ``demos/hertz_sphere.py``'s."""
+    ``demos/hertz_sphere.py``'s.  ``block = (L, D)``: also a quarter block
+    ``[0, L]^2 x [-D, 0]`` under it (no node shared, the same sizes), body ``block``,
+    facets ``block_top``, ``block_bottom``, ``block_symmetry_x``, ``block_symmetry_y``."""
     def build():
         occ = gmsh.model.occ
         vol = occ.addSphere(0, 0, R, R, angle1=-math.pi / 2, angle2=0.0, angle3=math.pi / 2)
+        under = occ.addBox(0, 0, -block[1], block[0], block[0], block[1]) if block else None
         occ.synchronize()
         names: dict[str, list[int]] = {}
         for _, s in gmsh.model.getBoundary([(3, vol)], oriented=False):
@@ -428,12 +444,19 @@ def quarter_sphere(path: Path, R: float = 10.0, h_contact: float = 0.1, h_far: f
                     "sphere_symmetry_x" if abs(c[0]) < 1e-6 * R else
                     "sphere_symmetry_y" if abs(c[1]) < 1e-6 * R else "sphere_surface")
             names.setdefault(name, []).append(s)
+        if under is not None:
+            for name, axis, value in (("block_top", 2, 0.0), ("block_bottom", 2, -block[1]),
+                                      ("block_symmetry_x", 0, 0.0),
+                                      ("block_symmetry_y", 1, 0.0)):
+                names[name] = boundary(3, under, axis, value)
         _graded(h_contact, h_far, refine_radius, growth)
         gmsh.option.setNumber("Mesh.Algorithm", 6)
         gmsh.option.setNumber("Mesh.Algorithm3D", 1)  # Delaunay: the same tetrahedra every run (HXT: not)
         gmsh.model.mesh.generate(3)
         gmsh.model.mesh.setOrder(order)
         group(3, [vol], "sphere")
+        if under is not None:
+            group(3, [under], "block")
         for name, tags in names.items():
             group(2, tags, name)
     return write_model(build, path, comm)

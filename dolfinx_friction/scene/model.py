@@ -111,8 +111,9 @@ class ContactPair:
     method: str = "penalty"
     augmented_tolerance: float = 1e-4
     #: "nodal" or "mortar": how a slave node's force reaches a deformable master's nodes
-    #: (the master face's shape functions at its projection, or mortar weights)
-    distribution: str = "nodal"
+    #: (the master face's shape functions at its projection, or mortar weights); None:
+    #: "mortar" for quadratic slave faces on a deformable master, else "nodal"
+    distribution: Optional[str] = None
 
     def __post_init__(self) -> None:
         validate(self, RULES[ContactPair])

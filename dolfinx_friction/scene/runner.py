@@ -26,6 +26,9 @@ log = logging.getLogger(__name__)
 #: Overclosure, as a share of the slave node spacing, beyond which a run warns that the
 #: penalty is too soft for the mesh.
 PENETRATION_WARNING = 0.05
+#: Chord depth of quadratic slave faces on first-order geometry, as a share of the largest
+#: overclosure, beyond which a run warns: the vertex nodes' pressures err by about as much.
+FACETING_WARNING = 0.02
 
 
 @dataclass
@@ -129,6 +132,13 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
             if ratio > PENETRATION_WARNING:
                 warn(pair, f"contact {pair}: overclosure reaches {ratio:.1%} of the slave node "
                            f"spacing at t = {inc.t:.4g}; the penalty K is too soft for this mesh")
+        for name, pair in problem.pairs.items():
+            depth, ratio = pair.faceting()
+            if ratio > FACETING_WARNING:
+                warn(name + " faceted", f"contact {name}: quadratic slave faces on first-order "
+                     f"geometry: mid-side nodes {depth:.2g} inside the curved surface, "
+                     f"{ratio:.0%} of the overclosure, so the nodal pressures err by about as "
+                     f"much; mesh it with second-order geometry (gmsh Mesh.ElementOrder = 2)")
         for pair, count in inc.detached.items():
             if count:
                 warn(pair + " detached", f"contact {pair}: {count} slave node(s) in contact slid "

@@ -444,10 +444,13 @@ def test_overrides_of_the_contract(tmp_path):
 
 
 def test_distribution_of_the_slave_forces(tmp_path):
-    """distribution: "nodal" by default (scene files of versions 1 and 2 unchanged),
-    "mortar" from the file or --set."""
+    """distribution: unset by default (resolved with the mesh: "mortar" for quadratic slave
+    faces on a deformable master, else "nodal", as scene files of versions 1 and 2 had it),
+    "mortar" or "nodal" from the file or --set."""
     path = write(tmp_path, EXAMPLE)
-    assert load_scene(path).contacts[0].distribution == "nodal"
+    assert load_scene(path).contacts[0].distribution is None
+    assert load_scene(path, ["contact.0.distribution=nodal"]).contacts[0].distribution \
+        == "nodal"
     assert load_scene(path, ["contact.0.distribution=mortar"]).contacts[0].distribution \
         == "mortar"
     path = write(tmp_path, to_toml(edited("example", put("contact.0.distribution", "mortar"))))
