@@ -151,9 +151,33 @@ def main(argv=None) -> None:
                     rows.append([f"{gdim}D", case, f"{dofs:,}", name, f"{1e3 * first:.2f}",
                                  f"{1e3 * again:.2f}"])
                     print(*rows[-1], flush=True)
-    load1 = B.load_average()
+    report(data, rows, sorted(sizes), machine, B.load_average(), args.repeats,
+           args.no_results)
+
+
+def pivot(data: dict) -> list[list]:
+    """One row per (dimension, matrix, size), one column per solver."""
+    keys = sorted({(g, c, d[0]) for (g, c, _), points in data.items() for d in points})
+    rows = []
+    for g, c, dofs in keys:
+        row = [f"{g}D", c, f"{dofs:,}"]
+        for name in SOLVERS:
+            hit = [p for p in data.get((g, c, name), []) if p[0] == dofs]
+            if not hit:
+                row.append("-")
+                continue
+            _, first, again = hit[0]
+            row.append(f"{1e3 * again:.2f}" + (f" ({1e3 * first:.2f})"
+                                               if name in ("MUMPS LU", "PETSc LU nd") else ""))
+        rows.append(row)
+    return rows
+
+
+def report(data: dict, rows: list, dims: list, machine: dict, load1: float, repeats: int,
+           no_results: bool, note: str = "") -> None:
+    """The chart, the table and the crossover (RESULTS.md section unless ``no_results``)."""
     crossover = {}
-    for gdim in sizes:
+    for gdim in dims:
         mumps = data[(gdim, "unsymmetric", "MUMPS LU")]
         native = data[(gdim, "unsymmetric", "PETSc LU nd")]
         cheaper = [m[0] for m, p in zip(mumps, native) if p[2] <= m[2]]
@@ -180,15 +204,16 @@ def main(argv=None) -> None:
             "A `preonly` direct solve of the held elastic stiffness (P1, unit square of "
             "triangles / unit cube of hexahedra; unsymmetric: the top face's rows scaled by "
             "1 + 0.1 r), serial, one thread; CPU milliseconds, least of "
-            f"{args.repeats}: `first` (ordering, symbolic and numeric factorisation, "
+            f"{repeats}: `first` (ordering, symbolic and numeric factorisation, "
             "back-solve), `again` (the same matrix, new values: numeric factorisation and "
             "back-solve, a Newton iteration's cost).  Every solve's relative residual "
-            "<= 1e-10.  Chart: `figures/factor_crossover.png`.\n\n"
-            + B.table(["dim", "matrix", "dofs", "solver", "first [ms]", "again [ms]"], rows)
+            "<= 1e-10.  Chart: `figures/factor_crossover.png`.  `again` [ms] per solver "
+            "(`first` of MUMPS LU and PETSc LU nd in brackets; - not timed):\n\n"
+            + B.table(["dim", "matrix", "dofs", *SOLVERS], pivot(data))
             + "\n\nPETSc's LU (nd) costs no more than MUMPS's (repeated, unsymmetric) up to "
-            + ", ".join(f"{crossover[g]:,} dofs in {g}D" for g in sizes) + ".")
+            + ", ".join(f"{crossover[g]:,} dofs in {g}D" for g in dims) + "." + note)
     print(text)
-    if not args.no_results:
+    if not no_results:
         B.write_section("Direct solvers of small systems: MUMPS against PETSc's own", text)
 
 

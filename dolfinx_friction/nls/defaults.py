@@ -42,12 +42,13 @@ def choose(kind: str, dofs: int, gdim: int, direct_max_dofs: Optional[int] = Non
 
 #: the largest system, by geometric dimension, that a serial factorisation leaves to PETSc's
 #: own LU (Cholesky where symmetric; nested-dissection ordering) rather than MUMPS: MUMPS
-#: spends a fixed ~0.3 ms per factorisation (0.18 against 0.01 ms at 84 2D dofs), while
+#: spends a fixed ~0.2 ms per factorisation (0.18 against 0.01 ms at 84 2D dofs), while
 #: PETSc's unblocked elimination loses to MUMPS's dense fronts as they grow, the sooner in
-#: 3D (benchmarks/RESULTS.md, "Direct solvers of small systems": the numeric factorisation
-#: and solve of an elastic stiffness cost 0.23 against 1.15 ms at 544 2D dofs, 0.87 against
-#: 1.67 ms at 1,200; 3D: 0.10 against 0.36 ms at 144 dofs, 7.4 against 4.2 ms at 882)
-NATIVE_MAX_DOFS = {2: 2_000, 3: 400}
+#: 3D (benchmarks/RESULTS.md, "Direct solvers of small systems": numeric factorisation and
+#: solve of an elastic stiffness, unsymmetric / symmetric (Cholesky against LDL^T), 2D:
+#: 4.2 / 2.6 ms against 5.3 / 3.2 at 2,664 dofs, 13.3 / 10.8 against 13.4 / 8.5 at 5,940;
+#: 3D: 0.55 against 0.84 ms at 300 dofs, 2.5 against 1.9 at 540)
+NATIVE_MAX_DOFS = {2: 3_000, 3: 400}
 
 
 def factorisation(dofs: int, gdim: int, ranks: int) -> str:
