@@ -62,7 +62,6 @@ def stiffness(gdim: int, n: int):
                   ufl.sym(ufl.grad(v))) * ufl.dx
     A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(a))
     A.assemble()
-    x = mesh.geometry.x
 
     def dofs(where) -> np.ndarray:
         nodes = dolfinx.mesh.locate_entities_boundary(mesh, 0, where)
@@ -73,7 +72,6 @@ def stiffness(gdim: int, n: int):
     free = np.setdiff1d(np.arange(A.getSize()[0]), held).astype(PETSc.IntType)
     index = PETSc.IS().createGeneral(free, comm=PETSc.COMM_SELF)
     K = A.createSubMatrix(index, index)
-    del x
     return K, np.searchsorted(free, np.intersect1d(top, free))
 
 
@@ -135,7 +133,7 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     machine = B.machine()
     sizes = QUICK if args.quick else SIZES
-    rows, data = [], {}
+    data = {}
     for gdim, ns in sizes.items():
         for n in ns:
             K, top = stiffness(gdim, n)
@@ -148,10 +146,9 @@ def main(argv=None) -> None:
                     first, again = time_solver(A, pc_type, package, ordering,
                                                args.repeats)
                     data.setdefault((gdim, case, name), []).append((dofs, first, again))
-                    rows.append([f"{gdim}D", case, f"{dofs:,}", name, f"{1e3 * first:.2f}",
-                                 f"{1e3 * again:.2f}"])
-                    print(*rows[-1], flush=True)
-    report(data, rows, sorted(sizes), machine, B.load_average(), args.repeats,
+                    print(f"{gdim}D", case, f"{dofs:,}", name, f"{1e3 * first:.2f}",
+                          f"{1e3 * again:.2f}", flush=True)
+    report(data, sorted(sizes), machine, B.load_average(), args.repeats,
            args.no_results)
 
 
@@ -173,7 +170,7 @@ def pivot(data: dict) -> list[list]:
     return rows
 
 
-def report(data: dict, rows: list, dims: list, machine: dict, load1: float, repeats: int,
+def report(data: dict, dims: list, machine: dict, load1: float, repeats: int,
            no_results: bool, note: str = "") -> None:
     """The chart, the table and the crossover (RESULTS.md section unless ``no_results``)."""
     crossover = {}
