@@ -20,6 +20,11 @@ of the child processes); the least wall and the least CPU over the rounds are re
 Asserted: every point's final reactions in the sweeps equal the fresh run's to 1e-12
 relative (the same computation; bit for bit so far), and CalculiX's within 0.5 %
 (bench_ccx measured 0.037 % on this scene).
+
+Then where a warm point's CPU goes, for this tree and the ``--before`` one: a process per
+tree (``--point-worker``) runs the 10 points one after the other in-process, as a sweep's
+worker does (``run(..., workspace=...)``, all outputs), twice; per point the CPU of the
+whole ``run()`` and of each phase (the run's own timers); the least over the second pass.
 """
 from __future__ import annotations
 
@@ -50,7 +55,43 @@ def final_reaction(history) -> np.ndarray:
     return np.array([float(last[f"R_block_top_{a}"]) for a in "xyz"])
 
 
+PHASES = ("linear_solve", "output", "contact_search", "contact_assembly", "bulk_assembly",
+          "setup")
+
+
+def point_worker(toml: str) -> None:
+    """Run the 10 points twice in this process (warm, as a sweep's worker); print the least
+    CPU of a whole point and of each phase over the second pass (JSON)."""
+    import json
+    import time as clock
+
+    from dolfinx_friction.scene.runner import run
+    from dolfinx_friction.scene.workspace import Workspace
+    workspace, best = Workspace(), {}
+    for round_ in range(2):
+        for mu in MUS:
+            start = clock.process_time()
+            result = run(toml, out=f"warm_{mu}", overrides=[f"contact.0.mu={mu}"],
+                         workspace=workspace)
+            cpu = {"point": clock.process_time() - start, **{
+                phase: result.solver.timers.cpu[phase] for phase in PHASES}}
+            if round_:
+                best = {k: min(v, best.get(k, v)) for k, v in cpu.items()}
+            del result
+    print(json.dumps(best))
+
+
+def breakdown(toml, env) -> dict:
+    """The least CPU of a warm point and of its phases (seconds), by ``--point-worker``."""
+    import json
+    out = subprocess.run([B.PYTHON, __file__, "--point-worker", toml.name], cwd=toml.parent,
+                         env=env, check=True, capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
 def main(argv=None) -> None:
+    if argv is None and sys.argv[1:2] == ["--point-worker"]:
+        return point_worker(sys.argv[2])
     from dolfinx_friction.reference import calculix
     from dolfinx_friction.scene.toml import load_scene
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -96,6 +137,7 @@ def main(argv=None) -> None:
         w0, c0 = time.perf_counter(), B.children_cpu()
         ccx = [calculix.run_ccx(inp, details=True, threads=1) for inp in decks]
         times.setdefault("ccx", []).append((time.perf_counter() - w0, B.children_cpu() - c0))
+    points = {tree or " (this tree)": breakdown(toml, e) for tree, e in trees.items()}
     load1 = B.load_average()
     rows = {k: (min(w for w, _ in v), min(c for _, c in v)) for k, v in times.items()}
     worst_fresh, worst_ccx = 0.0, 0.0
@@ -120,7 +162,14 @@ def main(argv=None) -> None:
             "decks one after the other, in the same call, in rounds (least wall and least CPU "
             f"over {args.repeats} rounds).  Every point's final reactions: sweep = fresh run "
             f"(worst {worst_fresh:.1e} relative), CalculiX within {100 * worst_ccx:.3f} %.\n\n"
-            + B.table(["command", "wall [s]", "CPU [s]", "wall / ccx", "CPU / ccx"], table))
+            + B.table(["command", "wall [s]", "CPU [s]", "wall / ccx", "CPU / ccx"], table)
+            + "\n\nA warm point (in-process, as in a sweep's worker, all outputs): least CPU "
+            "over the 10 points of a second pass, seconds; phases by the run's timers, "
+            "`point` the whole `run()`; ccx's CPU per deck "
+            f"{ccx_cpu / len(MUS):.3f} s:\n\n"
+            + B.table(["tree", "point", *PHASES],
+                      [[tree.strip(), *(f"{cpu[k]:.3f}" for k in ("point", *PHASES))]
+                       for tree, cpu in points.items()]))
     print(text)
     if not args.no_results:
         B.write_section("Studies: a 10-point sweep against ccx", text)

@@ -38,6 +38,12 @@ a table is cut back to its former length, this increment's ``contact.csv`` rows 
 removed when a later part of it fails, and its scratch folder is deleted.  Field folders
 are not started when the free space is below twice the last one's size: under MPI,
 dolfinx aborts the process when HDF5 fails to close a file on a full disk.
+
+On one rank the field files are written in memory first (a folder of the writer's own in
+:data:`MEMORY`, emptied every increment) and copied into the scratch folder: dolfinx
+rewrites an XDMF file after each function it adds, and on a disk (ext4) a file rewritten
+from its start is flushed when it is closed, eight times per body and increment
+(benchmarks/RESULTS.md, "Studies: a 10-point sweep against ccx").  The files are the same.
 """
 from __future__ import annotations
 
@@ -46,6 +52,8 @@ import json
 import logging
 import os
 import shutil
+import tempfile
+import weakref
 from pathlib import Path
 from typing import Optional
 
@@ -116,6 +124,21 @@ def _collective(comm, error: Optional[str], reduce: bool = False) -> None:
     error = next((e for e in errors if e), None)
     if error:
         raise OutputError(error)
+
+
+#: a memory file system where a serial run writes its field files before they are copied to
+#: the results (none: they are written in place)
+MEMORY = Path("/dev/shm")
+
+
+def _memory_folder() -> Optional[Path]:
+    """A new folder in :data:`MEMORY`, or None where there is none to write to."""
+    if not (MEMORY.is_dir() and os.access(MEMORY, os.W_OK)):
+        return None
+    try:
+        return Path(tempfile.mkdtemp(prefix="dolfinx_friction_fields_", dir=MEMORY))
+    except OSError:
+        return None
 
 
 def _silence_hdf5() -> None:
@@ -352,6 +375,10 @@ class FieldWriter:
                                         lambda f=f: (f.u, self._stresses(f)))[1]
                          for f in problem.fields]
         self._functions: list[dict] = [{} for _ in problem.fields]  # output Functions by name
+        # where the field files are written before they are copied into place (serial)
+        self._memory = _memory_folder() if problem.comm.size == 1 else None
+        if self._memory is not None:
+            weakref.finalize(self, shutil.rmtree, str(self._memory), True)
 
     def _stresses(self, field) -> list:
         """Cell functions and the expressions that fill them: the Cauchy stress
@@ -382,8 +409,11 @@ class FieldWriter:
             for f, expression in stresses:
                 f.interpolate(expression)
             try:  # HDF5 writes collectively: every rank sees the failure
-                write_fields(path, field, spaces, self.problem.contact_fields(field), inc.t,
+                write_fields(path if self._memory is None else self._memory / path.name,
+                             field, spaces, self.problem.contact_fields(field), inc.t,
                              [f for f, _ in stresses], kept)
+                if self._memory is not None:
+                    self._copy_out(scratch)
             except (RuntimeError, OSError) as exc:
                 error = _fault(self.dir / name / path.name, exc)
             if comm.allreduce(error is not None):  # (any rank: the others must stop too)
@@ -401,6 +431,12 @@ class FieldWriter:
                 error = _fault(self.dir / name, exc)
             error = error or self._extend_series(self.dir / name, inc.t)
         _collective(comm, error)
+
+    def _copy_out(self, folder: Path) -> None:
+        """Move the files written in memory into ``folder`` (each a new file there)."""
+        for source in self._memory.iterdir():
+            shutil.copyfile(source, folder / source.name)
+            source.unlink()
 
     def series_files(self) -> list[Path]:
         """The time series written so far."""

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Optional
 
-__all__ = ["CONVERGENCE", "DIRECT_MAX_DOFS", "ITERATIVE", "LINEAR_KINDS", "STALL_ITERATIONS",
-           "choose", "unsafe_option"]
+__all__ = ["CONVERGENCE", "DIRECT_MAX_DOFS", "ITERATIVE", "LINEAR_KINDS", "NATIVE_MAX_DOFS",
+           "STALL_ITERATIONS", "choose", "factorisation", "unsafe_option"]
 
 #: Newton's convergence tests (:mod:`dolfinx_friction.nls.newton`)
 CONVERGENCE = ("residual", "reactions")
@@ -38,6 +38,23 @@ def choose(kind: str, dofs: int, gdim: int, direct_max_dofs: Optional[int] = Non
         return kind
     limit = DIRECT_MAX_DOFS[gdim] if direct_max_dofs is None else direct_max_dofs
     return "direct" if dofs <= limit else "iterative"
+
+
+#: the largest system, by geometric dimension, that a serial factorisation leaves to PETSc's
+#: own LU (Cholesky where symmetric; nested-dissection ordering) rather than MUMPS: MUMPS
+#: spends a fixed ~0.2 ms per factorisation (0.18 against 0.01 ms at 84 2D dofs), while
+#: PETSc's unblocked elimination loses to MUMPS's dense fronts as they grow, the sooner in
+#: 3D (benchmarks/RESULTS.md, "Direct solvers of small systems": numeric factorisation and
+#: solve of an elastic stiffness, unsymmetric / symmetric (Cholesky against LDL^T), 2D:
+#: 4.2 / 2.6 ms against 5.3 / 3.2 at 2,664 dofs, 13.3 / 10.8 against 13.4 / 8.5 at 5,940;
+#: 3D: 0.55 against 0.84 ms at 300 dofs, 2.5 against 1.9 at 540)
+NATIVE_MAX_DOFS = {2: 3_000, 3: 400}
+
+
+def factorisation(dofs: int, gdim: int, ranks: int) -> str:
+    """The package that factorises a system of ``dofs`` unknowns in ``gdim`` dimensions on
+    ``ranks`` ranks: ``"petsc"`` (serial, up to :data:`NATIVE_MAX_DOFS`) or ``"mumps"``."""
+    return "petsc" if ranks == 1 and dofs <= NATIVE_MAX_DOFS[gdim] else "mumps"
 
 
 def unsafe_option(name: str, value: object) -> str:

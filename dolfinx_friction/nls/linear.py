@@ -63,6 +63,13 @@ partitions of the Hertz cylinder demo on 3 ranks (the matrix symmetric to 6e-17,
 fine; dolfinx 0.5's partitions differ from run to run), so several ranks factorise LU.
 The condensed path's ``K`` is factorised so whenever it is symmetric (linear
 bodies, friction or not).  Their counts are doubled to LU's for every decision above.
+``package="petsc"`` (one rank, without user ``options``) factorises with PETSc's own LU
+(Cholesky where symmetric, nested-dissection ordering) instead of MUMPS, every Jacobian
+afresh unless ``reuse`` is given: below
+:data:`~dolfinx_friction.nls.defaults.NATIVE_MAX_DOFS` MUMPS's fixed cost per call exceeds
+the elimination (:func:`~dolfinx_friction.nls.defaults.factorisation` chooses).  It does
+not pivot: a solve it fails (a zero pivot, or the residual check) is done again by MUMPS,
+which then stays; only MUMPS's failure is the solve's.
 ``reuse=False`` factorises every Jacobian.  With user ``options`` (another solver) the
 default is ``reuse=False``: their preconditioner is rebuilt for every Jacobian.  Only an
 LU or LDL^T factorisation is kept (``reuse`` is ignored for other preconditioners); one by
@@ -86,6 +93,12 @@ from dolfinx_friction.nls.free_rows import FreeRows
 from dolfinx_friction.nls.interior import Interior
 
 DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+#: PETSc's own factorisation, for small serial systems
+#: (:func:`~dolfinx_friction.nls.defaults.factorisation`)
+NATIVE = {"ksp_type": "preonly", "pc_factor_mat_solver_type": "petsc",
+          "pc_factor_mat_ordering_type": "nd"}
+#: the packages a default solver may factorise with
+PACKAGES = ("mumps", "petsc")
 #: GMRES's relative residual with a kept factorisation, unless the caller asks otherwise
 KRYLOV_RTOL = 1e-12
 REUSE = {"ksp_type": "gmres", "ksp_gmres_restart": 20, "ksp_atol": 0.0,
@@ -103,16 +116,18 @@ class LinearSolver:
     """Solves ``J x = b`` for a sequence of Jacobians, with PETSc options under ``prefix``."""
 
     def __init__(self, comm, prefix: str = "dolfinx_friction_", reuse: Optional[bool] = None,
-                 options: Optional[dict] = None, max_krylov: int = 20, symmetric: bool = False):
+                 options: Optional[dict] = None, max_krylov: int = 20, symmetric: bool = False,
+                 package: str = "mumps"):
+        if package not in PACKAGES:
+            raise ValueError(f"package = {package!r}: must be one of "
+                             f"{', '.join(map(repr, PACKAGES))}")
+        #: PETSc's own factorisation (``package="petsc"``, without ``options``: see the
+        #: module's docstring), MUMPS's after a failure
+        self._native = package == "petsc" and not options and comm.size == 1
         if reuse is None:
-            reuse = options is None
-        options = options or {}
-        ldlt = symmetric and not options and comm.size == 1  # see the module's docstring
-        defaults = {**(REUSE if reuse else DIRECT), **({"pc_type": "cholesky"} if ldlt else {})}
-        # they stay while this solver may factorise (MUMPS reads its own then)
-        own, written = private_options(prefix, {**defaults, **options})
-        weakref.finalize(self, forget_options, written).atexit = False
-        self.ksp = self._new_ksp(comm, own)
+            reuse = options is None and not self._native
+        self._prefix, self._options, self._symmetric = prefix, options or {}, symmetric
+        self.ksp = self._configured(comm, reuse)
         pc = self.ksp.getPC()
         #: the Jacobians must be symmetric (:meth:`BlockProblem.jacobian` with ``symmetric``)
         self.symmetric = pc.getType() in ("cholesky", "icc")
@@ -142,6 +157,17 @@ class LinearSolver:
         self._operator_sizes: Optional[tuple] = None  # of the matrix the KSP last had
         self._interior: Optional[Interior] = None
 
+    def _configured(self, comm, reuse: bool) -> PETSc.KSP:
+        """A KSP with this solver's defaults and options under a prefix of its own."""
+        options = self._options
+        ldlt = self._symmetric and not options and comm.size == 1  # see the module's docstring
+        defaults = {**(REUSE if reuse else DIRECT), **({"pc_type": "cholesky"} if ldlt else {}),
+                    **(NATIVE if self._native else {})}
+        # they stay while this solver may factorise (MUMPS reads its own then)
+        own, written = private_options(self._prefix, {**defaults, **options})
+        weakref.finalize(self, forget_options, written).atexit = False
+        return self._new_ksp(comm, own)
+
     @staticmethod
     def _new_ksp(comm, prefix: str) -> PETSc.KSP:
         """A KSP set from the options database under this solver's own ``prefix``."""
@@ -159,6 +185,9 @@ class LinearSolver:
                "pc_type": pc.getType()}
         if pc.getType() in ("lu", "cholesky", "ilu", "icc"):
             out["factor_solver_type"] = pc.getFactorSolverType()
+            if out["factor_solver_type"] == "petsc":
+                out["ordering"] = PETSc.Options().getString(
+                    self.ksp.getOptionsPrefix() + "pc_factor_mat_ordering_type", "nd")
         out["reuse_factorisation"] = self.reuse
         return out
 
@@ -209,10 +238,16 @@ class LinearSolver:
                 and J.getSize() == self._factored_size)
         self._paused = max(self._paused - 1, 0)
         ok = self._attempt(J, b, x, keep, rtol)
-        if ok or not keep:
-            return ok
-        self._paused = PAUSE
-        return self._attempt(J, b, x, False, rtol)
+        if not ok and keep:
+            self._paused = PAUSE
+            ok = self._attempt(J, b, x, False, rtol)
+        if not ok and self._native:  # it does not pivot: MUMPS answers before a failure
+            self._native = False
+            self.ksp.destroy()
+            self.ksp = self._configured(b.getComm(), False)
+            self._operator_sizes, self._factored_size = None, None
+            ok = self._attempt(J, b, x, False, rtol)
+        return ok
 
     def _attempt(self, J, b, x, keep: bool, rtol: float) -> bool:
         """One solve, with the kept factorisation or a fresh one; whether it converged."""

@@ -20,7 +20,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction.nls.linear import (KRYLOV_RTOL, LinearSolver, forget_options,
                                      write_options)
-from dolfinx_friction.nls.defaults import CONVERGENCE, STALL_ITERATIONS
+from dolfinx_friction.nls.defaults import CONVERGENCE, STALL_ITERATIONS, factorisation
 from dolfinx_friction.fem.block_problem import BlockProblem
 
 
@@ -63,8 +63,10 @@ class Newton:
     """Newton iterations from :attr:`BlockProblem.x` (contacts begun) to convergence.
 
     ``prefix`` and ``petsc_options`` set the linear solver (default MUMPS, with the
-    factorisation kept as GMRES preconditioner where only contact changes the Jacobian:
-    see :mod:`dolfinx_friction.nls.linear`).  ``convergence``: ``"residual"`` (the residual
+    factorisation kept as GMRES preconditioner where only contact changes the Jacobian;
+    PETSc's own factorisation of every Jacobian for a small serial system,
+    :func:`~dolfinx_friction.nls.defaults.factorisation`: see
+    :mod:`dolfinx_friction.nls.linear`).  ``convergence``: ``"residual"`` (the residual
     norm test alone) or ``"reactions"`` (that test, or the reactions and displacements
     settled to ``reaction_tol``: :func:`settled`).  ``stall``: with ``solve(may_stall=True)``,
     give up after that many iterations without a new lowest residual (0: never; default
@@ -91,10 +93,12 @@ class Newton:
     def _solver(self, problem: BlockProblem) -> LinearSolver:
         if self.linear is None:
             reuse = self.reuse_factorisation
+            package = factorisation(problem.x.getSize(), problem.gdim, problem.comm.size)
             if reuse is None and self.petsc_options is None:
-                reuse = problem.linear  # a kept factorisation pays where only contact changes
+                # a kept factorisation pays where only contact changes, and MUMPS's costs
+                reuse = problem.linear and package == "mumps"
             self.linear = LinearSolver(problem.comm, self.prefix, reuse, self.petsc_options,
-                                       symmetric=problem.symmetric)
+                                       symmetric=problem.symmetric, package=package)
         return self.linear
 
     @staticmethod

@@ -479,3 +479,67 @@ def test_rigid_obstacle_force_control(shared_dir):
     np.testing.assert_allclose(last.rigid_f["plate"], force, atol=1e-9)
     np.testing.assert_allclose(last.reactions["top"], -np.asarray(force), rtol=1e-8, atol=1e-9)
     assert last.rigid_u["plate"][2] > 0.0
+
+
+def _stacked_scene(mesh, mu: float) -> Scene:
+    """2D: the upper block pressed on the lower one and slid (``stacked``'s groups)."""
+    return Scene(
+        mesh=mesh, bodies=(Body("lower", 2000.0, 0.25), Body("upper", 1000.0, 0.3)),
+        contacts=(ContactPair("upper_bottom", "lower_top", mu=mu),),
+        steps=(Step("press", bcs=(BC("lower_bottom", (0.0, 0.0)),
+                                  BC("upper_top", (0.0, -0.01)))),
+               Step("slide", increments=3, bcs=(BC("upper_top", (0.02, -0.01)),))))
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.3])
+def test_small_serial_system_is_factorised_by_petsc(shared_dir, mu):
+    """A 2D system below ``NATIVE_MAX_DOFS``: on one rank PETSc's own factorisation
+    (Cholesky when frictionless, LU with friction; nested dissection) of every Jacobian,
+    recorded in summary.json; MUMPS on several ranks.  The reactions of MUMPS's LU to
+    round-off (measured: 2.5e-15 R on 146 dofs), in the same Newton iterations."""
+    from dolfinx_friction.nls.defaults import NATIVE_MAX_DOFS, factorisation
+    mesh = meshes.stacked(shared_dir / "stack_native.msh", 8, 6)
+    scene = _stacked_scene(mesh, mu)
+    out = shared_dir / f"native_mu{mu}"
+    result = run(scene, out=out)
+    dofs = result.problem.system.x.getSize()
+    assert dofs <= NATIVE_MAX_DOFS[2] and factorisation(dofs, 2, 2) == "mumps"
+    settings = json.loads((out / "summary.json").read_text())["resolved"]["linear_solver"]
+    serial = MPI.COMM_WORLD.size == 1
+    assert settings["factor_solver_type"] == ("petsc" if serial else "mumps")
+    if serial:
+        assert settings["ordering"] == "nd" and not settings["reuse_factorisation"]
+        assert settings["pc_type"] == ("cholesky" if mu == 0.0 else "lu")
+    mumps, solver = _solve(scene, petsc_options={"pc_factor_mat_solver_type": "mumps"})
+    assert solver.linear.settings()["factor_solver_type"] == "mumps"
+    for a, b in zip(result.increments, mumps):
+        for group in b.reactions:
+            R = np.abs(b.reactions[group]).max()
+            np.testing.assert_allclose(a.reactions[group], b.reactions[group], atol=1e-10 * R)
+    assert [i.iterations for i in result.increments] == [i.iterations for i in mumps]
+
+
+def test_petsc_factorisation_hands_a_failed_solve_to_mumps():
+    """PETSc's LU does not pivot: a zero on the diagonal (a regular matrix) fails it, MUMPS
+    solves that system and stays; a singular matrix fails both, with MUMPS's reason."""
+    comm = MPI.COMM_SELF
+    A = PETSc.Mat().createAIJ((3, 3), csr=([0, 2, 4, 5], [0, 1, 0, 1, 2],
+                                           [0.0, 2.0, 3.0, 1.0, 4.0]), comm=comm)
+    b = A.createVecLeft()
+    b.setArray([2.0, 4.0, 8.0])
+    x = b.duplicate()
+    linear = LinearSolver(comm, package="petsc")
+    assert linear.settings()["factor_solver_type"] == "petsc"
+    assert linear.solve(A, b, x) and linear.failure == ""
+    np.testing.assert_allclose(x.getArray(), [1.0, 1.0, 2.0], rtol=1e-14)
+    assert linear.settings()["factor_solver_type"] == "mumps"
+    singular = PETSc.Mat().createAIJ((2, 2), csr=([0, 2, 4], [0, 1, 0, 1],
+                                                  [1.0, 1.0, 1.0, 1.0]), comm=comm)
+    b, x = singular.createVecLeft(), singular.createVecLeft()
+    b.setArray([1.0, 2.0])
+    linear = LinearSolver(comm, package="petsc")
+    assert not linear.solve(singular, b, x)
+    assert "singular Jacobian" in linear.failure
+    assert linear.settings()["factor_solver_type"] == "mumps"
+    with pytest.raises(ValueError, match="package"):
+        LinearSolver(comm, package="umfpack")
