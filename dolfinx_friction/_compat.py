@@ -229,12 +229,13 @@ def _host_tag() -> str:
 
 #: C compiler flags added to dolfinx's for every form's kernel: math functions need not set
 #: ``errno``, so the compiler computes repeated ``pow(J, -2/3)``-like calls of a
-#: finite-strain tangent once (same values bit for bit; the Neo-Hookean Jacobian on
-#: hexahedra assembles in 0.6x the time); the kernel uses this CPU's instructions (AVX2,
-#: FMA: the Neo-Hookean Jacobian of the full ironing of benchmarks/bench_ccx_nlgeom.py in
-#: 18 instead of 24 ms; fused multiply-adds round differently, reactions move by <= 1e-13
-#: relative).  The host's tag is a macro of no use but in the flags, which dolfinx's kernel
-#: cache is keyed on: a cache shared by machines of other CPUs never loads a foreign kernel.
+#: finite-strain tangent once (the Neo-Hookean Jacobian on hexahedra assembles in 0.6x the
+#: time); the kernel uses this CPU's vector instructions but no fused multiply-add (which
+#: rounds differently): the Neo-Hookean Jacobian of the full ironing of
+#: benchmarks/bench_ccx_nlgeom.py assembles in 17-18 instead of 23-24 ms, its values the
+#: same bit for bit as with ``-O2`` alone.  The host's tag is a macro of no use but in the
+#: flags, on which dolfinx's kernel cache is keyed: a cache shared by machines of other
+#: CPUs never loads a foreign kernel.
 PURE_MATH_FLAGS = ["-fno-math-errno", "-march=native", "-ffp-contract=off",
                    f"-DDOLFINX_FRICTION_HOST={_host_tag()}"]
 
