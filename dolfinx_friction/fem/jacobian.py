@@ -67,6 +67,7 @@ class BlockJacobian:
         #: each linear body's values in :attr:`base`
         self.linear_data = {k: self.base.gather_values(k, values[k])
                             for k, body in enumerate(problem.bodies) if body.linear}
+        self._linear_sum = sum(self.linear_data.values(), np.zeros(self.base.nnz))
         self.K_linear: Optional[PETSc.Mat] = None
         if homogeneous:
             self.K_linear = self.base.create_matrix()
@@ -121,10 +122,10 @@ class BlockJacobian:
 
     def bulk_values(self) -> np.ndarray:
         """Values of the bodies' Jacobians at their current ``u``, in the bulk pattern."""
-        base = np.zeros(self.base.nnz)
+        base = self._linear_sum.copy()  # zero in the other bodies' rows
         for k, body in enumerate(self.problem.bodies):
-            base += (self.linear_data[k] if body.linear
-                     else self.base.gather_values(k, body.jacobian_values()))
+            if not body.linear:
+                self.base.put_values(k, body.jacobian_values(), base)
         return base
 
     def matrix(self) -> PETSc.Mat:

@@ -148,13 +148,18 @@ class Interior:
                 self._B.destroy()
             self._B = PETSc.Mat().createAIJWithArrays((m, m), csr, comm=PETSc.COMM_SELF)
             self._csr, self._values = csr, csr[2]
-            self._from = (np.searchsorted(keys, r * m + c), slots)
-            self._minus_D = np.zeros(len(keys))
-            self._minus_D[np.searchsorted(keys, ds * m + dc)] = -self.D.ravel()
+            to = np.searchsorted(keys, r * m + c)
+            self._values[np.searchsorted(keys, ds * m + dc)] = -self.D.ravel()
+            # J's entries go to ``to``, -D added where they meet it; -D alone stays as written
+            on_J = self._values[to]
+            at = np.flatnonzero(on_J)
+            self._from, self._J_PP, self._minus_D = (to, slots), np.empty(len(to)), (at, on_J[at])
             self._pattern = key
         to, slots = self._from
-        self._values[:] = self._minus_D
-        self._values[to] += csr_values(J)[slots]
+        at, minus_D = self._minus_D
+        np.take(csr_values(J), slots, out=self._J_PP)
+        self._J_PP[at] += minus_D
+        self._values[to] = self._J_PP
         self._B.assemble()  # the values changed (a factorisation is redone)
         return self._B
 
