@@ -133,7 +133,15 @@ class CooPattern:
         for k, block in enumerate(new._blocks):
             block.slots = slot_of_extra[inverse[bounds[k]:bounds[k + 1]]]
         new.diagonal_slots = new.base_slots[self.diagonal_slots]
-        new._set_keys(np.insert(base, where, added))
+        # this pattern's compressed rows with the added keys inserted (no division of
+        # every key again)
+        new._keys, new.nnz = np.insert(base, where, added), len(base) + len(added)
+        rows = added // self.n_global
+        new._row_of_slot = np.insert(self._row_of_slot, where, rows)
+        new.indices = np.insert(self.indices, where,
+                                (added % self.n_global).astype(PETSc.IntType))
+        new.indptr = self.indptr + np.concatenate(
+            [[0], np.cumsum(np.bincount(rows, minlength=self.n_owned))]).astype(PETSc.IntType)
         return new
 
     def from_base(self, data: np.ndarray) -> np.ndarray:
