@@ -15,6 +15,7 @@ the Open MPI version (``mpirun -q`` is gone in Open MPI 5).
 """
 from __future__ import annotations
 
+import platform
 import re
 
 import numpy as np
@@ -216,7 +217,6 @@ def _host_tag() -> str:
     """A short hash of this CPU's model and instruction-set flags (``/proc/cpuinfo``; the
     machine's architecture where that is unreadable)."""
     import hashlib
-    import platform
     try:
         with open("/proc/cpuinfo") as f:
             lines = [ln for ln in f if ln.split(":")[0].strip() in ("model name", "flags",
@@ -235,9 +235,11 @@ def _host_tag() -> str:
 #: benchmarks/bench_ccx_nlgeom.py assembles in 17-18 instead of 23-24 ms, its values the
 #: same bit for bit as with ``-O2`` alone.  The host's tag is a macro of no use but in the
 #: flags, on which dolfinx's kernel cache is keyed: a cache shared by machines of other
-#: CPUs never loads a foreign kernel.
-PURE_MATH_FLAGS = ["-fno-math-errno", "-march=native", "-ffp-contract=off",
-                   f"-DDOLFINX_FRICTION_HOST={_host_tag()}"]
+#: CPUs never loads a foreign kernel.  Only on x86-64 (where GCC and Clang both take
+#: ``-march=native``).
+PURE_MATH_FLAGS = ["-fno-math-errno"] + (
+    ["-march=native", "-ffp-contract=off", f"-DDOLFINX_FRICTION_HOST={_host_tag()}"]
+    if platform.machine() in ("x86_64", "AMD64") else [])
 
 
 def form(expr):
