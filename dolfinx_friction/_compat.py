@@ -15,6 +15,7 @@ the Open MPI version (``mpirun -q`` is gone in Open MPI 5).
 """
 from __future__ import annotations
 
+import platform
 import re
 
 import numpy as np
@@ -212,11 +213,33 @@ def scatter_forward(f) -> None:
     f.x.scatter_forward()
 
 
+def _host_tag() -> str:
+    """A short hash of this CPU's model and instruction-set flags (``/proc/cpuinfo``; the
+    machine's architecture where that is unreadable)."""
+    import hashlib
+    try:
+        with open("/proc/cpuinfo") as f:
+            lines = [ln for ln in f if ln.split(":")[0].strip() in ("model name", "flags",
+                                                                   "Features", "CPU part")]
+    except OSError:
+        lines = []
+    text = "".join(dict.fromkeys(lines)) or platform.machine()
+    return hashlib.sha1(text.encode()).hexdigest()[:12]
+
+
 #: C compiler flags added to dolfinx's for every form's kernel: math functions need not set
 #: ``errno``, so the compiler computes repeated ``pow(J, -2/3)``-like calls of a
-#: finite-strain tangent once (same values bit for bit; the Neo-Hookean Jacobian on
-#: hexahedra assembles in 0.6x the time).
-PURE_MATH_FLAGS = ["-fno-math-errno"]
+#: finite-strain tangent once (the Neo-Hookean Jacobian on hexahedra assembles in 0.6x the
+#: time); the kernel uses this CPU's vector instructions but no fused multiply-add (which
+#: rounds differently): the Neo-Hookean Jacobian of the full ironing of
+#: benchmarks/bench_ccx_nlgeom.py assembles in 17-18 instead of 23-24 ms, its values the
+#: same bit for bit as with ``-O2`` alone.  The host's tag is a macro of no use but in the
+#: flags, on which dolfinx's kernel cache is keyed: a cache shared by machines of other
+#: CPUs never loads a foreign kernel.  Only on x86-64 (where GCC and Clang both take
+#: ``-march=native``).
+PURE_MATH_FLAGS = ["-fno-math-errno"] + (
+    ["-march=native", "-ffp-contract=off", f"-DDOLFINX_FRICTION_HOST={_host_tag()}"]
+    if platform.machine() in ("x86_64", "AMD64") else [])
 
 
 def form(expr):

@@ -67,6 +67,7 @@ class BlockJacobian:
         #: each linear body's values in :attr:`base`
         self.linear_data = {k: self.base.gather_values(k, values[k])
                             for k, body in enumerate(problem.bodies) if body.linear}
+        self._linear_sum = sum(self.linear_data.values(), np.zeros(self.base.nnz))
         self.K_linear: Optional[PETSc.Mat] = None
         if homogeneous:
             self.K_linear = self.base.create_matrix()
@@ -78,6 +79,7 @@ class BlockJacobian:
         self._abs_data: Optional[np.ndarray] = None
         self._bulk_data: Optional[np.ndarray] = None  # bulk Jacobian values (last, or constant)
         self._zeroed: Optional[tuple] = None  # (key, slots of the constrained rows, columns)
+        self._sources: Optional[tuple] = None  # (key, where the static values come from)
         self._static: Optional[tuple] = None  # (key, free obstacle rows, Jacobian without contact)
         self._coupling_slots: Optional[tuple] = None  # (key, contacts' slots, zeroed ones)
         self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
@@ -121,10 +123,10 @@ class BlockJacobian:
 
     def bulk_values(self) -> np.ndarray:
         """Values of the bodies' Jacobians at their current ``u``, in the bulk pattern."""
-        base = np.zeros(self.base.nnz)
+        base = self._linear_sum.copy()  # zero in the other bodies' rows
         for k, body in enumerate(self.problem.bodies):
-            base += (self.linear_data[k] if body.linear
-                     else self.base.gather_values(k, body.jacobian_values()))
+            if not body.linear:
+                self.base.put_values(k, body.jacobian_values(), base)
         return base
 
     def matrix(self) -> PETSc.Mat:
@@ -175,15 +177,29 @@ class BlockJacobian:
         cached = self._static
         if cached is not None and _same(cached[0], key) and np.array_equal(cached[1], free):
             return cached[2]
-        data = self._pattern.from_base(base)
-        data[self._zeroed_slots(rows, symmetric)] = 0.0
+        data = np.take(np.concatenate([base, [0.0, 1.0]]), self._static_sources(rows, symmetric))
         # A force-controlled obstacle may have no stiffness along some axis (a
         # frictionless plane in its own plane): a tiny spring in the Jacobian only keeps
         # it regular; the residual, hence the solution, is unchanged.
         data[self._pattern.diagonal_slots[free]] += self._rigid_spring(base)
-        data[self._pattern.diagonal_slots[rows]] = 1.0
         self._static = (key, free, data)
         return data
+
+    def _static_sources(self, rows: np.ndarray, symmetric: bool) -> np.ndarray:
+        """For each slot of :meth:`matrix`'s pattern, where :meth:`_static_values` takes its
+        value: a slot of the bulk pattern, or past its end a zero (a slot the bulk pattern
+        does not have, the constrained rows, ``symmetric``: and columns) or a one (their
+        diagonal); kept with the pattern and the rows (one gather per Jacobian)."""
+        key = (self._pattern, rows, symmetric)
+        cached = self._sources
+        if cached is None or not _same(cached[0], key):
+            nnz = self.base.nnz
+            sources = np.full(self._pattern.nnz, nnz)
+            sources[self._pattern.base_slots] = np.arange(nnz)
+            sources[self._zeroed_slots(rows, symmetric)] = nnz
+            sources[self._pattern.diagonal_slots[rows]] = nnz + 1
+            self._sources = cached = (key, sources)
+        return cached[1]
 
     def _zeroed_slots(self, rows: np.ndarray, symmetric: bool) -> np.ndarray:
         """CSR slots of the constrained ``rows`` (``symmetric``: and of their columns on

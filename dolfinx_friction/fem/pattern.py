@@ -45,6 +45,7 @@ class _Block:
         self.slots = np.empty(0, dtype=np.int64)
         self.unique: np.ndarray | None = None  # its distinct slots (sorted), and of each entry
         self.position: np.ndarray | None = None  # its index in them
+        self.distinct: bool | None = None  # serial, and no two entries share a slot
 
     def exchange(self, comm: MPI.Comm, send: np.ndarray, dtype) -> np.ndarray:
         """Send entries (in constructor order) to the owners of their rows."""
@@ -132,7 +133,15 @@ class CooPattern:
         for k, block in enumerate(new._blocks):
             block.slots = slot_of_extra[inverse[bounds[k]:bounds[k + 1]]]
         new.diagonal_slots = new.base_slots[self.diagonal_slots]
-        new._set_keys(np.insert(base, where, added))
+        # this pattern's compressed rows with the added keys inserted (no division of
+        # every key again)
+        new._keys, new.nnz = np.insert(base, where, added), len(base) + len(added)
+        rows = added // self.n_global
+        new._row_of_slot = np.insert(self._row_of_slot, where, rows)
+        new.indices = np.insert(self.indices, where,
+                                (added % self.n_global).astype(PETSc.IntType))
+        new.indptr = self.indptr + np.concatenate(
+            [[0], np.cumsum(np.bincount(rows, minlength=self.n_owned))]).astype(PETSc.IntType)
         return new
 
     def from_base(self, data: np.ndarray) -> np.ndarray:
@@ -146,6 +155,19 @@ class CooPattern:
         b = self._blocks[block]
         received = b.exchange(self.comm, np.asarray(values, dtype=float).ravel(), np.float64)
         return np.bincount(b.slots, weights=received, minlength=self.nnz)
+
+    def put_values(self, block: int, values: np.ndarray, out: np.ndarray) -> None:
+        """Add one block's values (given in its constructor order) into CSR data ``out``
+        that is zero wherever the block has entries: in serial, where no two of its
+        entries share a slot, they are written there (no exchange, no sum), else
+        :meth:`gather_values` is added."""
+        b = self._blocks[block]
+        if b.distinct is None:
+            b.distinct = self.comm.size == 1 and len(np.unique(b.slots)) == len(b.slots)
+        if b.distinct:
+            out[b.slots] = values
+        else:
+            out += self.gather_values(block, values)
 
     def gather_slots(self, block: int, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """One block's values summed into its own slots: ``(slots, sums)``, ``slots`` sorted

@@ -139,22 +139,34 @@ class Interior:
             position[self.P] = np.arange(len(self.P))
             r, c, slots = _csr_block(indptr, cols, self.P, position)
             S = self.S
-            ds, dc = np.repeat(S, len(S)), np.tile(S, len(S))
             m = len(self.P)
-            keys = np.unique(np.concatenate([r * m + c, ds * m + dc]))
+            # both key lists are sorted (CSR order): D's keys missing from J's are merged in
+            J_keys, D_keys = r * m + c, (S[:, None] * m + S[None, :]).ravel()
+            at = np.searchsorted(J_keys, D_keys)
+            new = np.ones(len(D_keys), bool)
+            inside = at < len(J_keys)
+            new[inside] = J_keys[at[inside]] != D_keys[inside]
+            keys = np.insert(J_keys, at[new], D_keys[new])
+            # J's key i moves up by the number of D's keys inserted before it
+            to = np.arange(len(J_keys)) + np.cumsum(
+                np.bincount(at[new], minlength=len(J_keys) + 1))[:len(J_keys)]
             ptr = np.searchsorted(keys, np.arange(m + 1) * m).astype(PETSc.IntType)
             csr = (ptr, (keys % m).astype(PETSc.IntType), np.zeros(len(keys)))
             if self._B is not None:
                 self._B.destroy()
             self._B = PETSc.Mat().createAIJWithArrays((m, m), csr, comm=PETSc.COMM_SELF)
             self._csr, self._values = csr, csr[2]
-            self._from = (np.searchsorted(keys, r * m + c), slots)
-            self._minus_D = np.zeros(len(keys))
-            self._minus_D[np.searchsorted(keys, ds * m + dc)] = -self.D.ravel()
+            self._values[np.searchsorted(keys, D_keys)] = -self.D.ravel()
+            # J's entries go to ``to``, -D added where they meet it; -D alone stays as written
+            on_J = self._values[to]
+            at = np.flatnonzero(on_J)
+            self._from, self._J_PP, self._minus_D = (to, slots), np.empty(len(to)), (at, on_J[at])
             self._pattern = key
         to, slots = self._from
-        self._values[:] = self._minus_D
-        self._values[to] += csr_values(J)[slots]
+        at, minus_D = self._minus_D
+        np.take(csr_values(J), slots, out=self._J_PP)
+        self._J_PP[at] += minus_D
+        self._values[to] = self._J_PP
         self._B.assemble()  # the values changed (a factorisation is redone)
         return self._B
 
