@@ -103,8 +103,6 @@ def main(argv=None) -> None:
     d, py = toml.parent, B.PYTHON
     env = dict(os.environ, PYTHONPATH=str(B.ROOT), OMP_NUM_THREADS="1",
                DOLFINX_FRICTION_CACHE=str(B.work_dir("small") / "mesh_cache"))
-    ccx_env = dict(env, CCX_NPROC_STIFFNESS="1", CCX_NPROC_EQUATION_SOLVER="1",
-                   CCX_NPROC_RESULTS="1")
     values = ",".join(str(m) for m in MUS)
     decks = []
     for mu in MUS:
