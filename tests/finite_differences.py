@@ -82,6 +82,25 @@ def random_directions(template: PETSc.Vec, rng: np.random.Generator,
         yield dv
 
 
+def coordinate_noise(problem, seed: int = 0) -> np.ndarray:
+    """Owned values like ``problem.x`` in [-1, 1), a hash of each dof's node coordinates and
+    component (and of the obstacles' indices): the same numbers at the same dofs on any
+    number of ranks, so a perturbed iterate does not depend on the partition."""
+    def hashed(phase: np.ndarray) -> np.ndarray:
+        return 2.0 * np.modf(np.abs(np.sin(phase) * 43758.5453))[0] - 1.0
+    d = problem.gdim
+    values = np.zeros(problem.x.getLocalSize())
+    for k, V in enumerate(problem.spaces):
+        X = V.tabulate_dof_coordinates()[: V.dofmap.index_map.size_local]
+        phase = (X @ np.array([12.9898, 78.233, 37.719]))[:, None] + 3.7 * np.arange(d) \
+            + 7.1 * k + 1.9 * seed
+        values[problem.block_slice(k)] = hashed(phase).ravel()
+    for k in range(problem.n_obstacles):
+        rows = problem.obstacle_rows(k)
+        values[rows] = hashed(5.3 * k + 3.7 * np.arange(len(rows)) + 1.9 * seed + 0.5)
+    return values
+
+
 def scene_tangent_error(problem, h: float = 1e-7) -> float:
     """:func:`tangent_error` of a solved scene's system (no constrained rows) at its
     solution perturbed by 1e-5, from a start-of-increment state 0.999 times it, every

@@ -19,7 +19,7 @@ from dolfinx_friction import (NO_ELEMENT, BlockProblem, ContactSetupError, Newto
                               SNESNewton, Surface, create_matrix, rigid_cylinder, rigid_plane,
                               rigid_sdf, rigid_sphere, snes_solve, solve_steps)
 from dolfinx_friction import _compat as compat
-from tests.finite_differences import random_directions, tangent_error
+from tests.finite_differences import coordinate_noise, random_directions, tangent_error
 
 E, NU = 1000.0, 0.3
 BOTTOM, TOP = 1, 2
@@ -97,12 +97,11 @@ def press_and_slide(problem, contact, g=None, depth=0.03, slide=0.02, increments
 def fd_error(problem, contact, seed=0) -> float:
     """The worst error of the Jacobian against extrapolated central differences along 3
     random directions without a kink (:mod:`tests.finite_differences`) at a perturbed
-    iterate (mixed stick/slip, pairing frozen)."""
+    iterate (mixed stick/slip, pairing frozen; the same on any number of ranks)."""
     rng = np.random.default_rng(seed + MPI.COMM_WORLD.rank)
     start = problem.x.copy()
-    n = start.getLocalSize()
     scale = MPI.COMM_WORLD.allreduce(np.abs(start.getArray()).max(initial=0.0), op=MPI.MAX)
-    problem.x.setArray(start.getArray() + 1e-3 * scale * rng.standard_normal(n))
+    problem.x.setArray(start.getArray() + 1e-3 * scale * coordinate_noise(problem, seed))
     problem.apply_bcs()
     x = problem.x.copy()
     for c in problem.contacts:
@@ -275,9 +274,28 @@ def test_mortar_node_without_weights_hands_its_force_over_nodally():
     force = MPI.COMM_WORLD.allreduce(force, op=MPI.MAX)  # the scale of the contact rows
     assert force > 0.0
     b_without.axpy(-1.0, b_nodal)
-    assert b_without.norm(PETSc.NormType.INFINITY) < 1e-10 * force
+    assert b_without.norm(PETSc.NormType.INFINITY) < 1e-10 * force, \
+        worst_rows(mortar, b_without, b_nodal, [contact, contact_m])
     b_with.axpy(-1.0, b_nodal)
     assert b_with.norm(PETSc.NormType.INFINITY) > 1e-3 * force  # the weights do act
+
+
+def worst_rows(problem, difference: PETSc.Vec, b: PETSc.Vec, contacts) -> str:
+    """A failure's description: this rank's row of ``difference``'s largest entry (its body,
+    its node's coordinates, ``b`` there) and the largest normal force of each contact."""
+    values = difference.getArray()
+    if not len(values):
+        return "no rows on this rank"
+    row = int(np.argmax(np.abs(values)))
+    body = next(k for k in range(len(problem.spaces)) if problem.block_slice(k).start <= row
+                < problem.block_slice(k).stop)
+    V, d = problem.spaces[body], problem.gdim
+    node = (row - problem.block_slice(body).start) // d
+    forces = [float(np.abs(c.state().normal_force).max(initial=0.0)) for c in contacts]
+    return (f"rank {MPI.COMM_WORLD.rank}: row {row} (body {body}, node at "
+            f"{V.tabulate_dof_coordinates()[node]}, component {row % d}): difference "
+            f"{values[row]:.6g}, residual {b.getArray()[row]:.6g}; largest normal forces "
+            f"{forces}")
 
 
 def box_3d(x0, z0, width, height, n, cell, comm=MPI.COMM_WORLD):
