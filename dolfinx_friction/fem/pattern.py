@@ -107,8 +107,8 @@ class CooPattern:
     def extended(self, blocks: list[tuple[np.ndarray, np.ndarray]]) -> "CooPattern":
         """This pattern plus the entries of more blocks (collective).
 
-        The result's blocks are the new ones only; :meth:`from_base` moves CSR data of
-        this pattern into its layout.  Costs a few passes over this pattern's entries
+        The result's blocks are the new ones only; its ``base_slots`` (this pattern's
+        nnz,) are the slots of this pattern's entries in the result.  Costs a few passes over this pattern's entries
         instead of sorting them again (the bulk stiffness, when the contact couplings
         change).
         """
@@ -143,12 +143,6 @@ class CooPattern:
         new.indptr = self.indptr + np.concatenate(
             [[0], np.cumsum(np.bincount(rows, minlength=self.n_owned))]).astype(PETSc.IntType)
         return new
-
-    def from_base(self, data: np.ndarray) -> np.ndarray:
-        """CSR data of the pattern this one extends, in this pattern's layout."""
-        out = np.zeros(self.nnz)
-        out[self.base_slots] = data
-        return out
 
     def gather_values(self, block: int, values: np.ndarray) -> np.ndarray:
         """CSR data holding the sum of one block's values (given in its constructor order)."""
