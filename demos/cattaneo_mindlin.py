@@ -130,7 +130,7 @@ def main(argv=None) -> None:
     status = st["status"][closed]
     qx = st["tangential_force"][closed, 0] / st["area"][closed]
     order = np.argsort(x)
-    x, status, qx, p = x[order], status[order], qx[order], st["pressure"][closed][order]
+    x, status, qx = x[order], status[order], qx[order]
     # stick-zone edges: midway between the outermost stick node and its slipping neighbour
     sticking = np.flatnonzero(status == 1)
     lo, hi = sticking.min(), sticking.max()

@@ -20,8 +20,6 @@ from mpi4py import MPI
 gmsh = pytest.importorskip("gmsh")
 dolfinx = pytest.importorskip("dolfinx")
 import basix  # noqa: E402
-import dolfinx.fem  # noqa: E402
-import dolfinx.mesh  # noqa: E402
 import ufl  # noqa: E402
 
 from dolfinx_friction import _compat as compat  # noqa: E402
