@@ -55,26 +55,6 @@ PRESS = 0.01  # block top pushed down by 0.01 (2 % of its height)
 SLIDE = 0.5  # then slid by half the block width (4 slave faces)
 
 
-def _group(gmsh, dim, tags, name):
-    gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), name)
-
-
-def _rectangle(gmsh, x0, y0, w, h, nx, ny):
-    """Structured quadrilateral rectangle; returns (surface, {bottom, right, top, left})."""
-    geo = gmsh.model.geo
-    p = [geo.addPoint(x0, y0, 0), geo.addPoint(x0 + w, y0, 0), geo.addPoint(x0 + w, y0 + h, 0),
-         geo.addPoint(x0, y0 + h, 0)]
-    lines = [geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
-    s = geo.addPlaneSurface([geo.addCurveLoop(lines)])
-    # constraints through the geo kernel: a later geo.synchronize() keeps them
-    for i, line in enumerate(lines):
-        geo.mesh.setTransfiniteCurve(line, (nx if i % 2 == 0 else ny) + 1)
-    geo.mesh.setTransfiniteSurface(s)
-    geo.mesh.setRecombine(2, s)
-    geo.synchronize()
-    return s, dict(zip(("bottom", "right", "top", "left"), lines))
-
-
 def build_block(path: Path, n_slave: int = 8, ratio: float = 1.0, y0: float = 0.0,
                 x_end: float = 2.75, x_start: float = -0.5, shift: float = 0.37) -> Path:
     """Block [0, 1] x [y0, y0 + 0.5] over a foundation [x_start, x_end] x [-0.5, 0].
@@ -86,6 +66,8 @@ def build_block(path: Path, n_slave: int = 8, ratio: float = 1.0, y0: float = 0.
     ``foundation_top``, ``foundation_bottom``.
     """
     import gmsh
+
+    from dolfinx_friction.reference import meshes
     h_s = BLOCK_W / n_slave
     h_m = h_s / ratio
     x_start = x_start - shift * h_m
@@ -94,15 +76,15 @@ def build_block(path: Path, n_slave: int = 8, ratio: float = 1.0, y0: float = 0.
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("block")
-        blk, bl = _rectangle(gmsh, 0.0, y0, BLOCK_W, BLOCK_H, n_slave, max(2, n_slave // 2))
-        fnd, fl = _rectangle(gmsh, x_start, -FOUND_H, x_end - x_start, FOUND_H, n_m,
+        blk, bl = meshes.structured_rectangle(0.0, y0, BLOCK_W, BLOCK_H, n_slave, max(2, n_slave // 2))
+        fnd, fl = meshes.structured_rectangle(x_start, -FOUND_H, x_end - x_start, FOUND_H, n_m,
                              max(2, round(FOUND_H / max(h_m, 0.0625))))
-        _group(gmsh, 2, [blk], "block")
-        _group(gmsh, 2, [fnd], "foundation")
-        _group(gmsh, 1, [bl["bottom"]], "block_bottom")
-        _group(gmsh, 1, [bl["top"]], "block_top")
-        _group(gmsh, 1, [fl["top"]], "foundation_top")
-        _group(gmsh, 1, [fl["bottom"]], "foundation_bottom")
+        meshes.group(2, [blk], "block")
+        meshes.group(2, [fnd], "foundation")
+        meshes.group(1, [bl["bottom"]], "block_bottom")
+        meshes.group(1, [bl["top"]], "block_top")
+        meshes.group(1, [fl["top"]], "foundation_top")
+        meshes.group(1, [fl["bottom"]], "foundation_bottom")
         gmsh.model.mesh.generate(2)
         gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
         gmsh.write(str(path))
@@ -128,6 +110,8 @@ def build_ironing(path: Path, h_slave: float = 0.1, ratio: float = 1.0) -> Path:
     ``strip_top``, ``strip_bottom``.
     """
     import gmsh
+
+    from dolfinx_friction.reference import meshes
     R, X0 = IRON_R, IRON_X0
     h_m = h_slave / ratio
     gmsh.initialize()
@@ -142,7 +126,7 @@ def build_ironing(path: Path, h_slave: float = 0.1, ratio: float = 1.0) -> Path:
         top = geo.addLine(right, left)
         punch = geo.addPlaneSurface([geo.addCurveLoop([a1, a2, top])])
         geo.synchronize()
-        strip, sl = _rectangle(gmsh, 0.0, -IRON_DEPTH, IRON_LENGTH, IRON_DEPTH,
+        strip, sl = meshes.structured_rectangle(0.0, -IRON_DEPTH, IRON_LENGTH, IRON_DEPTH,
                                max(1, round(IRON_LENGTH / h_m)), max(4, round(IRON_DEPTH / 0.1)))
         f = gmsh.model.mesh.field
         dist = f.add("Distance")
@@ -163,12 +147,12 @@ def build_ironing(path: Path, h_slave: float = 0.1, ratio: float = 1.0) -> Path:
                            ("Mesh.RecombinationAlgorithm", 1)):
             gmsh.option.setNumber(key, value)
         gmsh.model.mesh.setRecombine(2, punch)
-        _group(gmsh, 2, [punch], "punch")
-        _group(gmsh, 2, [strip], "strip")
-        _group(gmsh, 1, [a1, a2], "punch_surface")
-        _group(gmsh, 1, [top], "punch_top")
-        _group(gmsh, 1, [sl["top"]], "strip_top")
-        _group(gmsh, 1, [sl["bottom"]], "strip_bottom")
+        meshes.group(2, [punch], "punch")
+        meshes.group(2, [strip], "strip")
+        meshes.group(1, [a1, a2], "punch_surface")
+        meshes.group(1, [top], "punch_top")
+        meshes.group(1, [sl["top"]], "strip_top")
+        meshes.group(1, [sl["bottom"]], "strip_bottom")
         gmsh.model.mesh.generate(2)
         types_ = gmsh.model.mesh.getElementTypes(2)
         if len(types_) != 1:
@@ -189,6 +173,8 @@ def build_groove(path: Path, h: float = 0.0625, slope_master: float = 0.1,
     ``foundation``; edges ``tip``, ``block_top``, ``groove``, ``foundation_bottom``.
     """
     import gmsh
+
+    from dolfinx_friction.reference import meshes
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -209,12 +195,12 @@ def build_groove(path: Path, h: float = 0.0625, slope_master: float = 0.1,
         for line in fl[2:4]:
             geo.mesh.setTransfiniteCurve(line, round(0.5 / h) + 1)
         geo.synchronize()
-        _group(gmsh, 2, [fs], "foundation")
-        _group(gmsh, 2, [bs], "block")
-        _group(gmsh, 1, fl[2:4], "groove")
-        _group(gmsh, 1, [fl[0]], "foundation_bottom")
-        _group(gmsh, 1, bl[:2], "tip")
-        _group(gmsh, 1, [bl[3]], "block_top")
+        meshes.group(2, [fs], "foundation")
+        meshes.group(2, [bs], "block")
+        meshes.group(1, fl[2:4], "groove")
+        meshes.group(1, [fl[0]], "foundation_bottom")
+        meshes.group(1, bl[:2], "tip")
+        meshes.group(1, [bl[3]], "block_top")
         gmsh.model.mesh.generate(2)
         gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
         gmsh.write(str(path))

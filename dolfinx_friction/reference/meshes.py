@@ -125,6 +125,24 @@ def rectangle_2d(path: Path, n: tuple[int, int] = (8, 2), quads: bool = True,
     return write_model(build, path)
 
 
+def structured_rectangle(x0: float, y0: float, w: float, h: float, nx: int, ny: int
+                         ) -> tuple[int, dict[str, int]]:
+    """The rectangle [x0, x0 + w] x [y0, y0 + h] in gmsh's geo kernel, meshed by nx x ny
+    quadrilaterals (synchronized; the constraints survive later synchronizations): its
+    surface tag and its edges' tags by side, ``bottom``, ``right``, ``top``, ``left``."""
+    geo = gmsh.model.geo
+    p = [geo.addPoint(x0, y0, 0), geo.addPoint(x0 + w, y0, 0), geo.addPoint(x0 + w, y0 + h, 0),
+         geo.addPoint(x0, y0 + h, 0)]
+    lines = [geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
+    s = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+    for i, line in enumerate(lines):
+        geo.mesh.setTransfiniteCurve(line, (nx if i % 2 == 0 else ny) + 1)
+    geo.mesh.setTransfiniteSurface(s)
+    geo.mesh.setRecombine(2, s)
+    geo.synchronize()
+    return s, dict(zip(("bottom", "right", "top", "left"), lines))
+
+
 def _transfinite_rectangle(s: int, n: tuple[int, int], quads: bool) -> None:
     """A structured mesh of the rectangle surface ``s``: ``n`` = segments along x, y."""
     for _, curve in gmsh.model.getBoundary([(2, s)], oriented=False):

@@ -62,32 +62,18 @@ def _within_tolerances(inc, step: Step) -> bool:
 
 
 # ----------------------------------------------------------------------------- meshes
-def _rectangle(x0, y0, w, h, nx, ny):
-    geo = gmsh.model.geo
-    p = [geo.addPoint(x0, y0, 0), geo.addPoint(x0 + w, y0, 0), geo.addPoint(x0 + w, y0 + h, 0),
-         geo.addPoint(x0, y0 + h, 0)]
-    lines = [geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
-    s = geo.addPlaneSurface([geo.addCurveLoop(lines)])
-    for i, line in enumerate(lines):
-        geo.mesh.setTransfiniteCurve(line, (nx if i % 2 == 0 else ny) + 1)
-    geo.mesh.setTransfiniteSurface(s)
-    geo.mesh.setRecombine(2, s)
-    return s, lines
-
-
 def block_on_foundation(path, y0: float = 0.0):
     """Block [0,1] x [y0, y0 + 0.5] (8 x 4 quads) on a foundation [-0.546, 1.5] x [-0.5, 0]
     (master faces of the block's size, shifted by 0.37 of a face)."""
     def build():
-        blk, bl = _rectangle(0.0, y0, 1.0, 0.5, 8, 4)
-        fnd, fl = _rectangle(-0.5 - 0.37 / 8, -0.5, 2.0 + 0.37 / 8, 0.5, 16, 4)
-        gmsh.model.geo.synchronize()
+        blk, bl = meshes.structured_rectangle(0.0, y0, 1.0, 0.5, 8, 4)
+        fnd, fl = meshes.structured_rectangle(-0.5 - 0.37 / 8, -0.5, 2.0 + 0.37 / 8, 0.5, 16, 4)
         meshes.group(2, [blk], "block")
         meshes.group(2, [fnd], "foundation")
-        meshes.group(1, [bl[0]], "block_bottom")
-        meshes.group(1, [bl[2]], "block_top")
-        meshes.group(1, [fl[2]], "foundation_top")
-        meshes.group(1, [fl[0]], "foundation_bottom")
+        meshes.group(1, [bl["bottom"]], "block_bottom")
+        meshes.group(1, [bl["top"]], "block_top")
+        meshes.group(1, [fl["top"]], "foundation_top")
+        meshes.group(1, [fl["bottom"]], "foundation_bottom")
         gmsh.model.mesh.generate(2)
     return meshes.write_model(build, path)
 
