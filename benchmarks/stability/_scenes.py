@@ -167,46 +167,11 @@ def build_ironing(path: Path, h_slave: float = 0.1, ratio: float = 1.0) -> Path:
 # --------------------------------------------------------------------------- groove (2D)
 def build_groove(path: Path, h: float = 0.0625, slope_master: float = 0.1,
                  slope_slave: float = 0.2) -> Path:
-    """A block whose bottom is a convex V (tip at (0.5, 0)) over a foundation whose top is a
-    concave V-groove (bottom at (0.5, 0)): the tip node sits on the edge between the two
-    groove faces, each of which pushes it towards the other.  Groups: bodies ``block``,
-    ``foundation``; edges ``tip``, ``block_top``, ``groove``, ``foundation_bottom``.
-    """
-    import gmsh
+    """:func:`dolfinx_friction.reference.meshes.tip_in_groove` (serially)."""
+    from mpi4py import MPI
 
     from dolfinx_friction.reference import meshes
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("groove")
-        geo = gmsh.model.geo
-        f = [geo.addPoint(0, -0.5, 0, h), geo.addPoint(1, -0.5, 0, h),
-             geo.addPoint(1, 0.5 * slope_master, 0, h), geo.addPoint(0.5, 0, 0, h),
-             geo.addPoint(0, 0.5 * slope_master, 0, h)]
-        fl = [geo.addLine(f[i], f[(i + 1) % 5]) for i in range(5)]
-        fs = geo.addPlaneSurface([geo.addCurveLoop(fl)])
-        b = [geo.addPoint(0.25, 0.25 * slope_slave, 0, h), geo.addPoint(0.5, 0, 0, h),
-             geo.addPoint(0.75, 0.25 * slope_slave, 0, h), geo.addPoint(0.75, 0.3, 0, h),
-             geo.addPoint(0.25, 0.3, 0, h)]
-        bl = [geo.addLine(b[i], b[(i + 1) % 5]) for i in range(5)]
-        bs = geo.addPlaneSurface([geo.addCurveLoop(bl)])
-        for line in bl[:2]:
-            geo.mesh.setTransfiniteCurve(line, round(0.25 / h) + 1)
-        for line in fl[2:4]:
-            geo.mesh.setTransfiniteCurve(line, round(0.5 / h) + 1)
-        geo.synchronize()
-        meshes.group(2, [fs], "foundation")
-        meshes.group(2, [bs], "block")
-        meshes.group(1, fl[2:4], "groove")
-        meshes.group(1, [fl[0]], "foundation_bottom")
-        meshes.group(1, bl[:2], "tip")
-        meshes.group(1, [bl[3]], "block_top")
-        gmsh.model.mesh.generate(2)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return path
+    return meshes.tip_in_groove(path, h, slope_master, slope_slave, comm=MPI.COMM_SELF)
 
 
 # ----------------------------------------------------------------------------- demos

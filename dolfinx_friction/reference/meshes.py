@@ -143,6 +143,40 @@ def structured_rectangle(x0: float, y0: float, w: float, h: float, nx: int, ny: 
     return s, dict(zip(("bottom", "right", "top", "left"), lines))
 
 
+def tip_in_groove(path: Path, h: float = 0.0625, slope_master: float = 0.1,
+                  slope_slave: float = 0.2, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """A block whose bottom is a convex V (tip at (0.5, 0)) over a foundation [0, 1] x
+    [-0.5, 0] whose top is a concave V-groove (bottom at (0.5, 0)), triangles of size ``h``:
+    the tip node sits on the edge between the two groove faces, each of which pushes it
+    towards the other.  Bodies ``block``, ``foundation``; edges ``tip``, ``block_top``,
+    ``groove``, ``foundation_bottom``."""
+    def build():
+        geo = gmsh.model.geo
+        f = [geo.addPoint(0, -0.5, 0, h), geo.addPoint(1, -0.5, 0, h),
+             geo.addPoint(1, 0.5 * slope_master, 0, h), geo.addPoint(0.5, 0, 0, h),
+             geo.addPoint(0, 0.5 * slope_master, 0, h)]
+        fl = [geo.addLine(f[i], f[(i + 1) % 5]) for i in range(5)]
+        fs = geo.addPlaneSurface([geo.addCurveLoop(fl)])
+        b = [geo.addPoint(0.25, 0.25 * slope_slave, 0, h), geo.addPoint(0.5, 0, 0, h),
+             geo.addPoint(0.75, 0.25 * slope_slave, 0, h), geo.addPoint(0.75, 0.3, 0, h),
+             geo.addPoint(0.25, 0.3, 0, h)]
+        bl = [geo.addLine(b[i], b[(i + 1) % 5]) for i in range(5)]
+        bs = geo.addPlaneSurface([geo.addCurveLoop(bl)])
+        for line in bl[:2]:
+            geo.mesh.setTransfiniteCurve(line, round(0.25 / h) + 1)
+        for line in fl[2:4]:
+            geo.mesh.setTransfiniteCurve(line, round(0.5 / h) + 1)
+        geo.synchronize()
+        group(2, [fs], "foundation")
+        group(2, [bs], "block")
+        group(1, fl[2:4], "groove")
+        group(1, [fl[0]], "foundation_bottom")
+        group(1, bl[:2], "tip")
+        group(1, [bl[3]], "block_top")
+        gmsh.model.mesh.generate(2)
+    return write_model(build, path, comm)
+
+
 def _transfinite_rectangle(s: int, n: tuple[int, int], quads: bool) -> None:
     """A structured mesh of the rectangle surface ``s``: ``n`` = segments along x, y."""
     for _, curve in gmsh.model.getBoundary([(2, s)], oriented=False):

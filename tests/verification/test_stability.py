@@ -78,36 +78,6 @@ def block_on_foundation(path, y0: float = 0.0):
     return meshes.write_model(build, path)
 
 
-def tip_in_groove(path):
-    """A block whose bottom is a convex V (slope 0.2, tip at (0.5, 0)) over a foundation
-    whose top is a concave V-groove (slope 0.1, bottom at (0.5, 0)): the tip node sits on
-    the edge between the two groove faces."""
-    def build():
-        geo, h = gmsh.model.geo, 0.0625
-        f = [geo.addPoint(0, -0.5, 0, h), geo.addPoint(1, -0.5, 0, h), geo.addPoint(1, 0.05, 0, h),
-             geo.addPoint(0.5, 0, 0, h), geo.addPoint(0, 0.05, 0, h)]
-        fl = [geo.addLine(f[i], f[(i + 1) % 5]) for i in range(5)]
-        fs = geo.addPlaneSurface([geo.addCurveLoop(fl)])
-        b = [geo.addPoint(0.25, 0.05, 0, h), geo.addPoint(0.5, 0, 0, h),
-             geo.addPoint(0.75, 0.05, 0, h), geo.addPoint(0.75, 0.3, 0, h),
-             geo.addPoint(0.25, 0.3, 0, h)]
-        bl = [geo.addLine(b[i], b[(i + 1) % 5]) for i in range(5)]
-        bs = geo.addPlaneSurface([geo.addCurveLoop(bl)])
-        for line in bl[:2]:
-            geo.mesh.setTransfiniteCurve(line, 5)
-        for line in fl[2:4]:
-            geo.mesh.setTransfiniteCurve(line, 9)
-        geo.synchronize()
-        meshes.group(2, [fs], "foundation")
-        meshes.group(2, [bs], "block")
-        meshes.group(1, fl[2:4], "groove")
-        meshes.group(1, [fl[0]], "foundation_bottom")
-        meshes.group(1, bl[:2], "tip")
-        meshes.group(1, [bl[3]], "block_top")
-        gmsh.model.mesh.generate(2)
-    return meshes.write_model(build, path)
-
-
 # ----------------------------------------------------------------------------- scenes
 def _sliding_block(mesh, slide: float, max_cutbacks: int, line_search: bool = False) -> Scene:
     """Press the block 0.01 into the foundation, then slide it by ``slide`` in one
@@ -192,7 +162,7 @@ def test_pairing_freeze_stops_face_chattering(shared_dir):
     """The tip node in a concave V-groove is pushed by each groove face towards the other:
     re-paired in every iteration it alternates between the two faces for ever; with the
     pairing frozen it converges on one of them."""
-    mesh = tip_in_groove(shared_dir / "groove.msh")
+    mesh = meshes.tip_in_groove(shared_dir / "groove.msh")
     frozen = run(_groove_scene(mesh, 2), write=False)
     inc = frozen.increments[-1]
     assert inc.active == 1 and inc.iterations <= 6
