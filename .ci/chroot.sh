@@ -57,6 +57,9 @@ PACKAGES=(
     python3-pyvista python3-matplotlib python3-numba python3-tqdm libegl1 openmpi-bin
     # the serial run in two processes (pytest -n 2): 408 s instead of 577-688 on sid
     python3-pytest-xdist
+    # an optimised BLAS for MUMPS (the host's scripts/setup.sh installs it too): without
+    # it the reference BLAS serves, and a 3D P2 Hertz run took 178 s of CPU, not 24
+    libopenblas0-serial
     # VTK renders through X only in these suites: pictures need a virtual X server
     xvfb xauth
     # dolfinx JIT-compiles forms (ffcx -> cffi -> C compiler + Python headers)
