@@ -40,7 +40,8 @@ are not started when the free space is below twice the last one's size: under MP
 dolfinx aborts the process when HDF5 fails to close a file on a full disk.
 
 On one rank the field files are written in memory first (a folder of the writer's own in
-:data:`MEMORY`, emptied every increment) and copied into the scratch folder: dolfinx
+:data:`MEMORY`, emptied every increment, removed at the end or by a later run when a
+signal that runs no Python code killed this one) and copied into the scratch folder: dolfinx
 rewrites an XDMF file after each function it adds, and on a disk (ext4) a file rewritten
 from its start is flushed when it is closed, eight times per body and increment
 (benchmarks/RESULTS.md, "Studies: a 10-point sweep against ccx").  The files are the same.
@@ -53,6 +54,7 @@ import logging
 import os
 import shutil
 import tempfile
+import time
 import weakref
 from pathlib import Path
 from typing import Optional
@@ -129,16 +131,48 @@ def _collective(comm, error: Optional[str], reduce: bool = False) -> None:
 #: a memory file system where a serial run writes its field files before they are copied to
 #: the results (none: they are written in place)
 MEMORY = Path("/dev/shm")
+#: the name of a writer's folder in :data:`MEMORY`: this prefix, the process id, ``_``
+MEMORY_PREFIX = "dolfinx_friction_fields_"
+#: a folder of a process that is gone is removed once it is this old (seconds): a process
+#: of another pid namespace that shares the memory file system writes into its folder
+#: at every increment
+ORPHAN_AGE = 3600.0
 
 
 def _memory_folder() -> Optional[Path]:
-    """A new folder in :data:`MEMORY`, or None where there is none to write to."""
+    """A new folder in :data:`MEMORY` named after this process (the folders of processes
+    killed before they could remove theirs removed), or None where there is none."""
     if not (MEMORY.is_dir() and os.access(MEMORY, os.W_OK)):
         return None
+    _remove_orphans()
     try:
-        return Path(tempfile.mkdtemp(prefix="dolfinx_friction_fields_", dir=MEMORY))
+        return Path(tempfile.mkdtemp(prefix=f"{MEMORY_PREFIX}{os.getpid()}_", dir=MEMORY))
     except OSError:
         return None
+
+
+def _remove_orphans() -> None:
+    """Remove the folders in :data:`MEMORY` of processes that are gone, untouched for
+    :data:`ORPHAN_AGE` (a process killed by a signal it cannot catch leaves its folder)."""
+    now = time.time()
+    for folder in MEMORY.glob(f"{MEMORY_PREFIX}*_*"):
+        pid = folder.name[len(MEMORY_PREFIX):].split("_", 1)[0]
+        try:
+            if (pid.isdigit() and not _alive(int(pid))
+                    and now - folder.stat().st_mtime > ORPHAN_AGE):
+                shutil.rmtree(folder, ignore_errors=True)
+        except OSError:
+            pass  # removed meanwhile, or not ours to look at
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's
+    return True
 
 
 def _silence_hdf5() -> None:

@@ -37,6 +37,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -46,6 +47,7 @@ from mpi4py import MPI
 
 from dolfinx_friction import _compat as compat
 from dolfinx_friction.reference import meshes
+from dolfinx_friction.io.writer import MEMORY, MEMORY_PREFIX, ORPHAN_AGE
 from dolfinx_friction.reference.cases import block_on_foundation_toml
 from tests.cli.test_outputs import series_grids
 
@@ -356,3 +358,34 @@ def test_full_disk_one_line(tmp_path, small_disk, what, ranks):
         for body in BODIES:
             assert [g.get("Name") for g in series_grids(out / "fields", body)] == visible
     assert not (out / "summary.json").exists()
+
+
+# ------------------------------------------------------------------ SIGKILL
+def test_a_killed_runs_memory_folder_goes_with_a_later_run(tmp_path):
+    """SIGKILL (no Python code runs) leaves a serial run's folder in MEMORY behind, where
+    its field files are staged; a later serial run that writes fields removes it once it is
+    ORPHAN_AGE old (26 such folders had gathered from a day of test runs), and keeps the
+    folder of a process that is alive."""
+    if not (MEMORY.is_dir() and os.access(MEMORY, os.W_OK)):
+        pytest.skip(f"no writable {MEMORY}")
+    meshes.two_boxes(tmp_path / "two.msh", n_block=(2, 2, 1), n_foundation=(3, 3, 1))
+    (tmp_path / "scene.toml").write_text(SCENE)
+    before = set(MEMORY.glob(f"{MEMORY_PREFIX}*"))
+    status, _, _ = _run_until(tmp_path, 1, 3, signal.SIGKILL)
+    assert status == -signal.SIGKILL
+    orphans = [f for f in set(MEMORY.glob(f"{MEMORY_PREFIX}*")) - before  # (other tests'
+               if not Path("/proc", f.name[len(MEMORY_PREFIX):].split("_")[0]).exists()]  # live)
+    assert len(orphans) == 1, orphans
+    live = Path(tempfile.mkdtemp(prefix=f"{MEMORY_PREFIX}{os.getpid()}_", dir=MEMORY))
+    try:
+        old = time.time() - 2.0 * ORPHAN_AGE
+        for folder in (*orphans, live):
+            os.utime(folder, (old, old))
+        command, env = _command(1)
+        again = subprocess.run([*command, str(tmp_path / "scene.toml"), "--out",
+                                str(tmp_path / "again"), "--quiet"], env=env,
+                               capture_output=True, text=True, timeout=240)
+        assert again.returncode == 0, again.stderr
+        assert not orphans[0].exists() and live.exists()
+    finally:
+        shutil.rmtree(live, ignore_errors=True)
