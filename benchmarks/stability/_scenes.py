@@ -76,9 +76,10 @@ def build_block(path: Path, n_slave: int = 8, ratio: float = 1.0, y0: float = 0.
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("block")
-        blk, bl = meshes.structured_rectangle(0.0, y0, BLOCK_W, BLOCK_H, n_slave, max(2, n_slave // 2))
+        blk, bl = meshes.structured_rectangle(0.0, y0, BLOCK_W, BLOCK_H, n_slave,
+                                              max(2, n_slave // 2))
         fnd, fl = meshes.structured_rectangle(x_start, -FOUND_H, x_end - x_start, FOUND_H, n_m,
-                             max(2, round(FOUND_H / max(h_m, 0.0625))))
+                                              max(2, round(FOUND_H / max(h_m, 0.0625))))
         meshes.group(2, [blk], "block")
         meshes.group(2, [fnd], "foundation")
         meshes.group(1, [bl["bottom"]], "block_bottom")
@@ -127,7 +128,8 @@ def build_ironing(path: Path, h_slave: float = 0.1, ratio: float = 1.0) -> Path:
         punch = geo.addPlaneSurface([geo.addCurveLoop([a1, a2, top])])
         geo.synchronize()
         strip, sl = meshes.structured_rectangle(0.0, -IRON_DEPTH, IRON_LENGTH, IRON_DEPTH,
-                               max(1, round(IRON_LENGTH / h_m)), max(4, round(IRON_DEPTH / 0.1)))
+                                                max(1, round(IRON_LENGTH / h_m)),
+                                                max(4, round(IRON_DEPTH / 0.1)))
         f = gmsh.model.mesh.field
         dist = f.add("Distance")
         f.setNumbers(dist, "CurvesList", [a1, a2])
