@@ -49,6 +49,8 @@ class ContactAssembly:
                  name: str):
         self.interaction, self.spaces, self.layout, self.name = interaction, spaces, layout, name
         self.comm, self.gdim = interaction.comm, interaction.gdim
+        #: (the conditions, their sorted global dofs): the conditions themselves are held,
+        #: so that a new condition never meets the dofs of a freed one of the same id
         self._bc_cache: tuple = ((), np.zeros(0, np.int64))
         self._dof_cache: tuple = (None,)  # (candidates, their dofs)
         #: the couplings of the matrix pattern: sorted node-pair keys, global rows, cols
@@ -235,9 +237,9 @@ class ContactAssembly:
 
     def _bc_dofs(self, bcs: Sequence) -> np.ndarray:
         """Sorted global dofs of the Dirichlet conditions ``bcs`` (all ranks; collective)."""
-        key = tuple(id(bc) for bc in bcs)
-        if self._bc_cache[0] == key:
-            return self._bc_cache[1]
+        held, dofs = self._bc_cache
+        if len(held) == len(bcs) and all(a is b for a, b in zip(held, bcs)):
+            return dofs
         d, own = self.gdim, []
         for bc in bcs:
             block = next((b for b, V in enumerate(self.spaces) if compat.bc_on_space(bc, V)),
@@ -248,7 +250,7 @@ class ContactAssembly:
             own.append(self.layout.nodes(block)[local // d] * d + local % d)
         mine = np.concatenate(own) if own else np.zeros(0, np.int64)
         dofs = np.unique(np.concatenate(self.comm.allgather(mine)))
-        self._bc_cache = (key, dofs)
+        self._bc_cache = (tuple(bcs), dofs)
         return dofs
 
     def _masked_dofs(self, bcs: Sequence) -> np.ndarray:
