@@ -352,7 +352,8 @@ class BlockProblem:
         (:meth:`imbalance`) along an axis exceeds ``sqrt(n) tolerance``, with n its free
         rows along that axis and ``tolerance`` the residual norm the convergence test
         accepts (the bound a converged residual keeps: Cauchy-Schwarz), or a slave node
-        whose friction force exceeds mu times its normal force (by more than round-off).
+        whose friction force exceeds mu times its normal force (by more than round-off), or
+        a contact that converged with stale pairings (:meth:`NodeToSurface.stale_pairing`).
         :func:`~dolfinx_friction.solve_steps` cuts back an increment that fails it."""
         imbalance, allowed = np.abs(self.imbalance()), np.sqrt(self.free_rows()) * tolerance
         ratio = np.divide(imbalance, allowed, out=np.where(imbalance > 0, np.inf, 0.0),
@@ -368,6 +369,11 @@ class BlockProblem:
             if excess > 0.0:
                 return (f"{c.name}: a friction force exceeds mu times its normal force by "
                         f"{excess:.3e}")
+        for c in self.contacts:
+            stale = c.stale_pairing()
+            if stale:
+                return (f"{c.name}: converged after its pairing froze; pairing at the "
+                        f"converged state closes or opens {stale} slave node(s)")
         return ""
 
     def roundoff_floor(self) -> float:

@@ -606,6 +606,23 @@ class NodeToSurface:
         self._evaluated_at = None
         return True
 
+    def stale_pairing(self) -> int:
+        """After a converged solve of the increment (collective): where the pairing froze
+        (after ``pairing_iterations`` > 1) before the solve converged, how many slave nodes
+        a pairing at the converged iterate closes or opens against the pairing the solve
+        converged with; 0 otherwise.  Not 0: the increment converged to the equilibrium
+        of stale pairings, not an answer (a node that only changes face is what the
+        freeze is for: one chattering between two faces).  With one pairing per increment
+        (small sliding) the pairing lags by an increment by design: 0."""
+        pairings = self._interaction.pairing_iterations
+        if pairings == 1 or self._iteration <= pairings or self._evaluated_at is None:
+            return 0  # paired at the last iterate, or once by design
+        x = self._u_n.duplicate()
+        x.setArray(self._evaluated_at[0])
+        changed = self._interaction.closed_change(x, self._u_n, self.ramp)
+        x.destroy()
+        return self.comm.allreduce(changed)
+
     def rollback(self) -> None:
         """Forget the increment: restore the history saved by :meth:`begin`."""
         self._evaluated_at = None

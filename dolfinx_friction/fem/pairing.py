@@ -318,7 +318,8 @@ class ContactInteraction:
         return c.slave.astype(np.int64) << 32 | self._face_ids[c.face]
 
     def pair(self, u: PETSc.Vec, iteration: int) -> None:
-        """Pair every slave node with one of its candidate masters within the cutoff.
+        """Pair every slave node with one of its candidate masters within the cutoff
+        (beyond the clearance its augmented multiplier ``multiplier_N`` closes).
 
         A slave node takes the nearest face onto which it projects orthogonally.
         Pairing has hysteresis: within an increment (``iteration > 0``) a node with
@@ -346,7 +347,7 @@ class ContactInteraction:
             had |= self.closed
         if self.rigid:
             kin = self.master.kinematics(self.slaves.X, u_s, self._gather(u)[0])
-            chosen = np.flatnonzero((kin.g_N <= self.cutoff) | had)
+            chosen = np.flatnonzero((kin.g_N <= self.cutoff + self.multiplier_N) | had)
             self._set_elements(chosen, np.zeros((len(chosen), 0)))
             return
         slave, cand = cands.slave, cands.face
@@ -378,7 +379,8 @@ class ContactInteraction:
         rank[current & (outside <= FACE_SLACK)] = 0
         rank[outside > EDGE_SLACK] = 3
         fallback = (self.lost & had)[slave] & np.isfinite(outside)
-        ok = np.flatnonzero(((outside <= EDGE_SLACK) & ((g_N <= self.cutoff[slave]) | had[slave]))
+        reach = self.cutoff[slave] + self.multiplier_N[slave]
+        ok = np.flatnonzero(((outside <= EDGE_SLACK) & ((g_N <= reach) | had[slave]))
                             | fallback)
         unit = TIE * self.slaves.spacing[slave[ok]]
         clearance = np.floor(np.where(rank[ok] == 3, outside[ok] / TIE, np.abs(g_N[ok]) / unit))
@@ -386,6 +388,28 @@ class ContactInteraction:
         order = ok[np.lexsort((*centroid.T[::-1], clearance, rank[ok], slave[ok]))]
         chosen = order[np.unique(slave[order], return_index=True)[1]]
         self._set_elements(chosen, self._xi[chosen])
+
+    def closed_change(self, u: PETSc.Vec, u_n: PETSc.Vec, ramp: float) -> int:
+        """How many slave nodes a first pairing at ``u`` (as at the start of an increment),
+        evaluated there, closes or opens against the current elements' evaluation.  The
+        current elements, their evaluation and the projections' starts stay as they are.
+        Collective; the count is this rank's."""
+        kept = (self.elements, self.lost, self._xi.copy(), self._trial, self._gap_offset,
+                self.master_motion)
+        closed = self._closed_nodes()
+        self.pair(u, 0)
+        self.evaluate(u, u_n, ramp)
+        changed = len(np.setxor1d(self._closed_nodes(), closed))
+        (self.elements, self.lost, self._xi, self._trial, self._gap_offset,
+         self.master_motion) = kept
+        return changed
+
+    def _closed_nodes(self) -> np.ndarray:
+        """The slave nodes whose current element is evaluated closed."""
+        el = self.elements
+        if el is None or el.result is None:
+            return np.zeros(0, dtype=np.int64)
+        return el.slave[el.result.status != OPEN]
 
     def _project(self, x_s: np.ndarray, x_f: np.ndarray, rows: np.ndarray, outside: np.ndarray,
                  g_N: np.ndarray, cold: bool = False) -> None:

@@ -51,13 +51,15 @@ def block(x0, y0, width, height, nx, ny, cell=mesh.CellType.quadrilateral, degre
     return V, tags
 
 
-def on_plane(degree=1, cell=mesh.CellType.quadrilateral, mu=0.3):
-    """A Neo-Hookean block held at its top, on a rigid plane that rises and slides."""
+def on_plane(degree=1, cell=mesh.CellType.quadrilateral, mu=0.3, pairing_iterations=8):
+    """A Neo-Hookean block (8 x 4 cells, 1 x 0.5) held at its top, on a rigid plane that
+    rises and slides."""
     V, tags = block(0.0, 0.0, 1.0, 0.5, 8, 4, cell, degree)
     u = fem.Function(V)
     held = fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(V, 1, tags.find(TOP)), V)
     contact = NodeToSurface(Surface(V, tags, BOTTOM), rigid_plane([0, 0], [0, 1]), E=E,
-                            K=100 * E / 0.125, stick_slope=10 * E / 0.125, mu=mu)
+                            K=100 * E / 0.125, stick_slope=10 * E / 0.125, mu=mu,
+                            pairing_iterations=pairing_iterations)
     return BlockProblem([neo_hookean(u, ufl.TestFunction(V))], [u], [held], [contact]), contact
 
 
@@ -561,6 +563,38 @@ def test_update_at_the_same_iterate_keeps_its_evaluation():
     contact.update(problem.x)
     assert contact.evaluations == first + 2
     np.testing.assert_allclose(contact.force(), force, rtol=1e-12, atol=0.0)
+
+
+def lifted(problem, dy: float) -> PETSc.Vec:
+    """A copy of the problem's vector with the block moved up by ``dy``."""
+    x = problem.x.copy()
+    s = problem.block_slice(0)
+    x.getArray()[s.start + 1:s.stop:2] += dy
+    return x
+
+
+def test_an_equilibrium_of_frozen_pairings_is_not_an_answer():
+    """Pairing froze (``pairing_iterations`` = 2) with the block lifted off the plane;
+    then the iterate sinks the block 0.01 into the plane: its frozen pairing has no
+    element, a pairing at that iterate closes all 9 bottom nodes.  ``stale_pairing``
+    counts them and the postcondition rejects the state whatever its residual.  Paired
+    at that iterate, or frozen where pairing there changes nothing: 0."""
+    problem, contact = on_plane(mu=0.0, pairing_iterations=2)
+    up, down = lifted(problem, 0.05), lifted(problem, -0.01)
+    contact.begin(up)
+    for _ in range(3):
+        contact.update(up)
+    contact.update(down)
+    assert contact.stale_pairing() == 9
+    b = problem.x.duplicate()
+    problem.residual(down, b)
+    assert "pairing at the converged state closes or opens 9" in problem.postcondition(1e30)
+    for frozen in (False, True):
+        contact.begin(down)
+        for _ in range(4 if frozen else 1):
+            contact.update(down)
+        assert contact.stale_pairing() == 0
+        assert 0 not in statuses(contact)  # all closed
 
 
 def test_snes_matches_newton():

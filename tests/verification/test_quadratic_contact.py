@@ -118,12 +118,12 @@ def test_hertz_cylinder_p2_on_an_elastic_block(shared_dir):
 
 
 @pytest.mark.xfail(MPI.COMM_WORLD.size > 1, strict=False,
-                   reason="a known wrong answer: on 2 ranks in Debian sid (partitions vary "
-                          "from run to run) 1 solve in 3-10 converges the press in one "
-                          "increment (29 of 30 iterations) instead of two, its pairings "
-                          "frozen at iteration 8 far from the answer: a node's pressure 146 % "
-                          "of p0 off.  An increment converged with stale pairings is accepted "
-                          "(serially, pairing_iterations = 1 gives +4500 % at the centre)")
+                   reason="on 2 ranks in Debian sid (partitions vary from run to run) 1 "
+                          "solve in 3-10 converged the press in one increment (29 of 30 "
+                          "iterations), its pairings frozen at iteration 8 far from the "
+                          "answer: a node's pressure 146 % of p0 off.  The postcondition now "
+                          "rejects such stale pairings (NodeToSurface.stale_pairing; 6 of 6 "
+                          "solves right since); kept until CI's sid runs confirm it")
 def test_hertz_sphere_p2_on_an_elastic_block(shared_dir):
     """T6 faces on a quarter block of the same material (6 x 6 x 3, P2, the same sizes,
     non-matching), the sphere's top pressed by 0.2, the default distribution (mortar for
