@@ -117,13 +117,6 @@ def test_hertz_cylinder_p2_on_an_elastic_block(shared_dir):
     assert penetration < PENETRATION_WARNING
 
 
-@pytest.mark.xfail(MPI.COMM_WORLD.size > 1, strict=False,
-                   reason="on 2 ranks in Debian sid (partitions vary from run to run) 1 "
-                          "solve in 3-10 converged the press in one increment (29 of 30 "
-                          "iterations), its pairings frozen at iteration 8 far from the "
-                          "answer: a node's pressure 146 % of p0 off.  The postcondition now "
-                          "rejects such stale pairings (NodeToSurface.stale_pairing; 6 of 6 "
-                          "solves right since); kept until CI's sid runs confirm it")
 def test_hertz_sphere_p2_on_an_elastic_block(shared_dir):
     """T6 faces on a quarter block of the same material (6 x 6 x 3, P2, the same sizes,
     non-matching), the sphere's top pressed by 0.2, the default distribution (mortar for
@@ -131,7 +124,10 @@ def test_hertz_sphere_p2_on_an_elastic_block(shared_dir):
     bodies and every node within 0.8 a within 5 % (measured +1.4 % / 2.9 % on gmsh 4.8's
     mesh, +3.2 % / 3.9 % on gmsh 4.13's of trixie and sid; the nodal distribution +357 %,
     its overclosure 56 % of the spacing); no overclosure warning (2.5 %).  The bounds are
-    those of the worse mesh; on 2 ranks see the xfail's reason."""
+    those of the worse mesh.  On 2 ranks in Debian sid 1 solve in 3-10 once converged the
+    press in one increment on pairings frozen 21 iterations before (a node 146 % of p0
+    off); the postcondition now cuts such an increment back (2 of 10 solves there, each
+    then right: NodeToSurface.stale_pairing)."""
     mesh = meshes.quarter_sphere(shared_dir / "sphere_block.msh", R=R, h_contact=0.25,
                                  refine_radius=1.5, order=2, block=(6.0, 3.0))
     deviation, r, penetration = _pressed(mesh, 3, depth=0.2, block=True)
