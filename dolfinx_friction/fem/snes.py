@@ -102,10 +102,11 @@ class SNESContact:
         (:meth:`NodeToSurface.augment`, at most
         :data:`~dolfinx_friction.fem.contact_settings.MAX_AUGMENTATIONS`), then
         :meth:`commit` if SNES converged, else :meth:`rollback` with the solution Functions
-        back at the increment's start (also where SNES raises, e.g. with
+        back at the increment's start (as where it converged on a contact's stale pairing,
+        :meth:`NodeToSurface.stale_pairing`: cut the increment back) (also where SNES raises, e.g. with
         ``snes_error_if_not_converged``: then the error propagates).  Returns SNES's
         converged reason (> 0 converged; ``DIVERGED_MAX_IT`` where the updates did not
-        end)."""
+        end or a pairing was stale)."""
         self.begin()
         start = self.problem.x.copy()
         try:
@@ -118,6 +119,8 @@ class SNESContact:
                 updates += 1
                 self.problem.solve()
                 reason = self.snes.getConvergedReason()
+            if reason > 0 and any([c.stale_pairing() for c in self.contacts]):
+                reason = PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
             if reason > 0:
                 self.commit()
             else:

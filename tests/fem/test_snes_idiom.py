@@ -115,6 +115,32 @@ def test_augmented_contacts_are_solved_again_until_their_overclosure_is_gone():
     assert (log.commits, log.rollbacks) == (len(LOADS), 0)
 
 
+class StalePairing(NodeToSurface):
+    """A pair that always reports a stale pairing (as one converged on pairings frozen far
+    from the answer: NodeToSurface.stale_pairing, tested on its own in test_contact_api)."""
+
+    def stale_pairing(self) -> int:
+        return 1
+
+
+@needs_snes
+def test_an_increment_converged_on_a_stale_pairing_is_rolled_back():
+    """SNES converges, but a pair's pairing is stale: solve() returns DIVERGED_MAX_IT,
+    rolls the contact's and the user's history back, and leaves the solution at the
+    increment's start (the user's loop cuts the increment back)."""
+    V, tags, u, F, held = block()
+    pair = StalePairing(Surface(V, tags, BOTTOM), rigid_plane([0.0, 0.0], [0.0, 1.0]), E=E,
+                        mu=0.3)
+    problem = NonlinearProblem(F, u, bcs=[held], petsc_options_prefix="test_stale_",
+                               petsc_options=OPTIONS)
+    log = Counter()
+    contact = add_contact(problem, [pair], bcs=[held], history=[log])
+    pair.obstacle_translation = LOADS[0]
+    assert contact.solve() == PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
+    assert (log.commits, log.rollbacks) == (0, 1)
+    assert MPI.COMM_WORLD.allreduce(np.abs(u.x.array).max(initial=0.0), op=MPI.MAX) == 0.0
+
+
 def two_bodies():
     """A Neo-Hookean block (quadrilaterals) pressed by its top onto a Neo-Hookean
     foundation (triangles, held at its bottom) and dragged: the residuals, unknowns,
