@@ -101,12 +101,12 @@ class SNESContact:
         contacts with ``method="augmented"``, again after each update of their multipliers
         (:meth:`NodeToSurface.augment`, at most
         :data:`~dolfinx_friction.fem.contact_settings.MAX_AUGMENTATIONS`), then
-        :meth:`commit` if SNES converged, else :meth:`rollback` with the solution Functions
-        back at the increment's start (as where it converged on a contact's stale pairing,
-        :meth:`NodeToSurface.stale_pairing`: cut the increment back) (also where SNES raises, e.g. with
-        ``snes_error_if_not_converged``: then the error propagates).  Returns SNES's
-        converged reason (> 0 converged; ``DIVERGED_MAX_IT`` where the updates did not
-        end or a pairing was stale)."""
+        :meth:`commit` if SNES converged on current pairings, else :meth:`rollback` with
+        the solution Functions back at the increment's start: also where it converged on a
+        contact's stale pairing (:meth:`NodeToSurface.stale_pairing`: cut the increment
+        back) and where SNES raises (e.g. with ``snes_error_if_not_converged``: then the
+        error propagates).  Returns SNES's converged reason (> 0 converged;
+        ``DIVERGED_MAX_IT`` where the updates did not end or a pairing was stale)."""
         self.begin()
         start = self.problem.x.copy()
         try:
