@@ -49,49 +49,17 @@ E = 1000.0
 NU = 0.3
 
 # --------------------------------------------------------------------------- block (2D)
-BLOCK_W, BLOCK_H = 1.0, 0.5
-FOUND_H = 0.5
+BLOCK_W = 1.0  # the block of meshes.block_on_foundation: 1 x 0.5 on a foundation 0.5 deep
 PRESS = 0.01  # block top pushed down by 0.01 (2 % of its height)
 SLIDE = 0.5  # then slid by half the block width (4 slave faces)
 
 
-def build_block(path: Path, n_slave: int = 8, ratio: float = 1.0, y0: float = 0.0,
-                x_end: float = 2.75, x_start: float = -0.5, shift: float = 0.37) -> Path:
-    """Block [0, 1] x [y0, y0 + 0.5] over a foundation [x_start, x_end] x [-0.5, 0].
-
-    ``n_slave`` faces along the block bottom (slave spacing h_s = 1/n_slave); the master
-    spacing is ``h_s / ratio`` (ratio = slave size / master size).  The master grid is
-    shifted by ``shift`` faces so that slave nodes do not start on master nodes.
-    Groups: bodies ``block``, ``foundation``; edges ``block_bottom``, ``block_top``,
-    ``foundation_top``, ``foundation_bottom``.
-    """
-    import gmsh
+def build_block(path: Path, **params) -> Path:
+    """:func:`dolfinx_friction.reference.meshes.block_on_foundation` (serially)."""
+    from mpi4py import MPI
 
     from dolfinx_friction.reference import meshes
-    h_s = BLOCK_W / n_slave
-    h_m = h_s / ratio
-    x_start = x_start - shift * h_m
-    n_m = max(1, round((x_end - x_start) / h_m))
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("block")
-        blk, bl = meshes.structured_rectangle(0.0, y0, BLOCK_W, BLOCK_H, n_slave,
-                                              max(2, n_slave // 2))
-        fnd, fl = meshes.structured_rectangle(x_start, -FOUND_H, x_end - x_start, FOUND_H, n_m,
-                                              max(2, round(FOUND_H / max(h_m, 0.0625))))
-        meshes.group(2, [blk], "block")
-        meshes.group(2, [fnd], "foundation")
-        meshes.group(1, [bl["bottom"]], "block_bottom")
-        meshes.group(1, [bl["top"]], "block_top")
-        meshes.group(1, [fl["top"]], "foundation_top")
-        meshes.group(1, [fl["bottom"]], "foundation_bottom")
-        gmsh.model.mesh.generate(2)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return path
+    return meshes.block_on_foundation(path, comm=MPI.COMM_SELF, **params)
 
 
 # ------------------------------------------------------------------------ ironing (2D)

@@ -289,6 +289,38 @@ def ring_section(path: Path, R: float = 5.0, c: float = 1.0, h: float = 0.1,
     return write_model(build, path, comm)
 
 
+def block_on_foundation(path: Path, n_slave: int = 8, ratio: float = 1.0, y0: float = 0.0,
+                        x_start: float = -0.5, x_end: float = 2.75, shift: float = 0.37,
+                        comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
+    """2D: a block [0, 1] x [y0, y0 + 0.5] over a foundation [x_start, x_end] x [-0.5, 0],
+    structured quadrilaterals.
+
+    ``n_slave`` faces along the block's bottom (slave spacing h_s = 1/n_slave, n_slave/2
+    layers, at least 2); the foundation's top spacing is ``h_s / ratio`` (ratio = slave size
+    / master size), its grid shifted by ``shift`` faces (x_start moves left by as much) so
+    that slave nodes do not start on master nodes.  Groups: ``block``, ``foundation``;
+    ``block_bottom``, ``block_top``, ``foundation_top``, ``foundation_bottom``.  The
+    stability tests' and maps' sliding block.
+    """
+    h_s = 1.0 / n_slave
+    h_m = h_s / ratio
+    x_start = x_start - shift * h_m
+    n_m = max(1, round((x_end - x_start) / h_m))
+
+    def build():
+        blk, bl = structured_rectangle(0.0, y0, 1.0, 0.5, n_slave, max(2, n_slave // 2))
+        fnd, fl = structured_rectangle(x_start, -0.5, x_end - x_start, 0.5, n_m,
+                                       max(2, round(0.5 / max(h_m, 0.0625))))
+        group(2, [blk], "block")
+        group(2, [fnd], "foundation")
+        group(1, [bl["bottom"]], "block_bottom")
+        group(1, [bl["top"]], "block_top")
+        group(1, [fl["top"]], "foundation_top")
+        group(1, [fl["bottom"]], "foundation_bottom")
+        gmsh.model.mesh.generate(2)
+    return write_model(build, path, comm)
+
+
 def blocks_on_foundation(path: Path, n_foundation: int = 5, n_block: int = 4,
                          tets: bool = False, comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
     """Block [0.25,0.75]^2 x [0.5,0.75] on foundation [0,1]^2 x [0,0.5] (not fragmented:

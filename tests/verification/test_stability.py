@@ -30,7 +30,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import gmsh
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -64,18 +63,8 @@ def _within_tolerances(inc, step: Step) -> bool:
 # ----------------------------------------------------------------------------- meshes
 def block_on_foundation(path, y0: float = 0.0):
     """Block [0,1] x [y0, y0 + 0.5] (8 x 4 quads) on a foundation [-0.546, 1.5] x [-0.5, 0]
-    (master faces of the block's size, shifted by 0.37 of a face)."""
-    def build():
-        blk, bl = meshes.structured_rectangle(0.0, y0, 1.0, 0.5, 8, 4)
-        fnd, fl = meshes.structured_rectangle(-0.5 - 0.37 / 8, -0.5, 2.0 + 0.37 / 8, 0.5, 16, 4)
-        meshes.group(2, [blk], "block")
-        meshes.group(2, [fnd], "foundation")
-        meshes.group(1, [bl["bottom"]], "block_bottom")
-        meshes.group(1, [bl["top"]], "block_top")
-        meshes.group(1, [fl["top"]], "foundation_top")
-        meshes.group(1, [fl["bottom"]], "foundation_bottom")
-        gmsh.model.mesh.generate(2)
-    return meshes.write_model(build, path)
+    (16 x 4, master faces of the block's size, shifted by 0.37 of a face)."""
+    return meshes.block_on_foundation(path, y0=y0, x_end=1.5)
 
 
 # ----------------------------------------------------------------------------- scenes
