@@ -6,7 +6,8 @@ are dimensionless.  Meridian sections of axisymmetric bodies (r = x >= 0, z = y)
 :func:`thick_cylinders`, :func:`sphere_section`, :func:`ring_section`.  The CalculiX
 comparisons' meshes: :func:`blocks_on_foundation`, :func:`ironing` (with their scenes in
 :mod:`dolfinx_friction.reference.cases`); Hertz contact on a rigid plane:
-:func:`quarter_disk`, :func:`quarter_sphere` (also on an elastic block).
+:func:`quarter_disk`, :func:`quarter_sphere` (also on an elastic block); the stability
+tests' and maps' sliding block: :func:`block_on_foundation`.
 """
 from __future__ import annotations
 
