@@ -369,7 +369,6 @@ class BlockProblem:
             if excess > 0.0:
                 return (f"{c.name}: a friction force exceeds mu times its normal force by "
                         f"{excess:.3e}")
-        for c in self.contacts:
             stale = c.stale_pairing()
             if stale:
                 return (f"{c.name}: converged after its pairing froze; pairing at the "

@@ -597,6 +597,26 @@ def test_an_equilibrium_of_frozen_pairings_is_not_an_answer():
         assert 0 not in statuses(contact)  # all closed
 
 
+def test_a_node_its_multiplier_holds_closed_keeps_its_element():
+    """``method="augmented"``: after a converged press the next increment's first pairing,
+    at an iterate that lifts the block 6e-4 (beyond the cutoff, within the clearance the
+    multipliers close: measured, 8e-4 opens the end nodes), keeps every bottom node's
+    element, closed; the cutoff alone dropped all 9 with their multipliers."""
+    V, tags = block(0.0, 0.0, 1.0, 0.5, 8, 4)
+    u = fem.Function(V)
+    held = fem.dirichletbc(np.zeros(2), fem.locate_dofs_topological(V, 1, tags.find(TOP)), V)
+    contact = NodeToSurface(Surface(V, tags, BOTTOM), rigid_plane([0, 0], [0, 1]), E=E,
+                            mu=0.0, method="augmented")
+    problem = BlockProblem([neo_hookean(u, ufl.TestFunction(V))], [u], [held], [contact])
+    solve_steps(problem, lambda t: setattr(contact, "obstacle_translation", (0.0, 0.03 * t)),
+                2)
+    x = lifted(problem, 6e-4)
+    contact.begin(x)
+    contact.update(x)
+    status = np.concatenate(MPI.COMM_WORLD.allgather(contact.state().status))
+    assert len(status) == 9 and np.all(status > 0)
+
+
 def test_snes_matches_newton():
     answers = []
     for use_snes in (False, True):
