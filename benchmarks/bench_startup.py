@@ -12,8 +12,8 @@ minimum CPU time (user + system, ``RUSAGE_CHILDREN``) over the repeats:
 
 * ``interpreter``: ``python -c pass``;
 * imports, cumulatively in the order a run loads them, each row the CPU it adds:
-  numpy, mpi4py (``MPI_Init``, without Open MPI's singleton daemon, as the command line
-  asks), petsc4py, dolfinx (with ufl, basix, ffcx), scipy (sparse, k-d tree), numba, the
+  numpy, mpi4py (``MPI_Init``, with the command line's singleton settings,
+  ``cli.mpi.SINGLETON``), petsc4py, dolfinx (with ufl, basix, ffcx), scipy (sparse, k-d tree), numba, the
   package's own modules (with the contact kernels);
 * in one process after those imports: numba's start (its typing and target contexts,
   which the first kernel call would set up), then the scene run twice through
@@ -37,6 +37,8 @@ import sys
 import _bench as B  # noqa: I001
 
 import bench_small as S
+
+from dolfinx_friction.cli.mpi import SINGLETON
 
 #: (row, statement added to the ones before)
 IMPORTS = [
@@ -83,7 +85,7 @@ def measure(root: str, toml, repeats: int) -> dict[str, float]:
     """CPU seconds per row for the package tree at ``root``."""
     py, d = B.PYTHON, toml.parent
     env = dict(os.environ, PYTHONPATH=root, OMP_NUM_THREADS="1",
-               OMPI_MCA_ess_singleton_isolated="1",
+               **SINGLETON,
                DOLFINX_FRICTION_CACHE=str(B.work_dir("small") / "mesh_cache"))
     rows = {"interpreter": cpu_of([py, "-c", "pass"], env, d, repeats)}
     before, statements = rows["interpreter"], []

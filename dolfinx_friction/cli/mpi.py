@@ -4,7 +4,7 @@ from __future__ import annotations
 import os
 import sys
 
-__all__ = ["LAUNCHER_RANKS", "LAUNCHER_SIZES", "rank", "ranks", "no_singleton_daemon"]
+__all__ = ["LAUNCHER_RANKS", "LAUNCHER_SIZES", "rank", "ranks", "SINGLETON", "singleton_settings"]
 
 #: What MPI launchers (Open MPI, PMIx, MPICH's PMI, MVAPICH) set in each rank's
 #: environment to its rank, and to the number of ranks (MPICH: ranks on the node).
@@ -34,11 +34,20 @@ def ranks() -> int:
     return 1 if found is None else found
 
 
-def no_singleton_daemon() -> None:
-    """A run started without a launcher is an MPI singleton, for which Open MPI 4 starts a
-    daemon (orted) that only spawning processes needs (the package never spawns): ~0.3 s of
-    wall time at start-up (``benchmarks/bench_small.py``).  Ask for none, before mpi4py is
-    imported; under a launcher (its rank variables set) nothing changes.  Open MPI 5 does
-    not know the variable and ignores it, as it ignores every unknown ``OMPI_MCA_``."""
+#: Open MPI settings of a process started without a launcher (an MPI singleton): no daemon
+#: (Open MPI 4 starts ``orted`` for a singleton, which only spawning processes need: ~0.3 s
+#: of wall time at start-up, ``benchmarks/bench_small.py``), and ``ob1``, the point-to-point
+#: layer Open MPI selects for a singleton anyway, named so that the ``cm`` layer does not
+#: probe for Omni-Path and PSM hardware first (0.20 s of MPI_Init's 0.23 s of wall time on
+#: Debian 12, 0.03 s of it CPU; ``benchmarks/RESULTS.md``, "Single runs").  Open MPI 5 and 6
+#: ignore the first, as they ignore every unknown ``OMPI_MCA_``, and take the second.
+SINGLETON = {"OMPI_MCA_ess_singleton_isolated": "1", "OMPI_MCA_pml": "ob1"}
+
+
+def singleton_settings() -> None:
+    """Apply :data:`SINGLETON` (where the user set none of them) before mpi4py is imported,
+    in a process that no launcher started (none of its rank variables set); under a
+    launcher nothing changes."""
     if not any(name in os.environ for name in LAUNCHER_RANKS):
-        os.environ.setdefault("OMPI_MCA_ess_singleton_isolated", "1")
+        for name, value in SINGLETON.items():
+            os.environ.setdefault(name, value)

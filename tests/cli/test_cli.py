@@ -901,3 +901,20 @@ def test_bad_input_one_line_under_mpirun(workdir, case_id):
     out = mpirun_cli(2, *case.argv(workdir))
     assert_one_line_error(out, case.expect)
     assert not (workdir / "never").exists() and not (workdir / "ran_script").exists()
+
+
+def test_singleton_settings_only_without_a_launcher(monkeypatch):
+    """A process no launcher started gets Open MPI's singleton settings where the user set
+    none (the user's own choice stays); under a launcher nothing is set."""
+    from dolfinx_friction.cli import mpi
+    for name in (*mpi.LAUNCHER_RANKS, *mpi.SINGLETON):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv("OMPI_MCA_pml", "ucx")
+    mpi.singleton_settings()
+    assert os.environ["OMPI_MCA_pml"] == "ucx"
+    assert os.environ["OMPI_MCA_ess_singleton_isolated"] == "1"
+    for name in mpi.SINGLETON:
+        monkeypatch.delenv(name)
+    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", "0")
+    mpi.singleton_settings()
+    assert not any(name in os.environ for name in mpi.SINGLETON)
