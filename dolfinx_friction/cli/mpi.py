@@ -34,14 +34,16 @@ def ranks() -> int:
     return 1 if found is None else found
 
 
-#: Open MPI settings of a process started without a launcher (an MPI singleton): no daemon
-#: (Open MPI 4 starts ``orted`` for a singleton, which only spawning processes need: ~0.3 s
-#: of wall time at start-up, ``benchmarks/bench_small.py``), and ``ob1``, the point-to-point
-#: layer Open MPI selects for a singleton anyway, named so that the ``cm`` layer does not
-#: probe for Omni-Path and PSM hardware first (0.20 s of MPI_Init's 0.23 s of wall time on
-#: Debian 12, 0.03 s of it CPU; ``benchmarks/RESULTS.md``, "Single runs").  Open MPI 5 and 6
-#: ignore the first, as they ignore every unknown ``OMPI_MCA_``, and take the second.
-SINGLETON = {"OMPI_MCA_ess_singleton_isolated": "1", "OMPI_MCA_pml": "ob1"}
+#: Open MPI settings of a process started without a launcher (an MPI singleton), which has
+#: no peer to talk to: no daemon (Open MPI 4 starts ``orted`` for a singleton, which only
+#: spawning processes need: ~0.3 s of wall time, ``benchmarks/bench_small.py``), and only
+#: the transports it uses, ``ob1`` over ``self`` (what Open MPI selects there anyway), so
+#: that no other layer probes for network hardware first: MPI_Init's wall time 0.23 ->
+#: 0.03 s on Debian 12 (Open MPI 4.1: the ``cm`` layer's PSM probes), 1.6 -> 0.55 s in sid
+#: (Open MPI 6.0: the ``ofi`` transport's libfabric), CPU 0.03-0.5 s either way.  Open MPI 5
+#: and 6 ignore the first, as they ignore every unknown ``OMPI_MCA_``.
+SINGLETON = {"OMPI_MCA_ess_singleton_isolated": "1", "OMPI_MCA_pml": "ob1",
+             "OMPI_MCA_btl": "self"}
 
 
 def singleton_settings() -> None:
