@@ -59,7 +59,7 @@ def _scene(args: argparse.Namespace):
 
 def run(args: argparse.Namespace, interruption: Interruption) -> int:
     scene = _scene(args)
-    from mpi4py import MPI
+    MPI = mpi.start()
 
     from dolfinx_friction.cli.progress import Progress
     from dolfinx_friction.scene.runner import run as run_scene
@@ -82,7 +82,7 @@ def check(args: argparse.Namespace, interruption: Interruption) -> int:
     """The scene and everything it asks of its mesh (:class:`~dolfinx_friction.scene.build.
     DiscreteScene`); no forms, nothing solved."""
     scene = _scene(args)
-    from mpi4py import MPI
+    MPI = mpi.start()
 
     from dolfinx_friction.scene.build import DiscreteScene
     model = DiscreteScene(scene, MPI.COMM_WORLD)

@@ -179,7 +179,6 @@ def main(argv: Optional[Sequence[str]] = None, workspace: Optional[Workspace] = 
     args.workspace = workspace
     _quiet_libraries(args.debug)
     _show_notices(getattr(args, "quiet", False))
-    mpi.singleton_settings()
     interruption = signals.install(args.command, mpi.rank())
     try:
         status = commands.COMMANDS[args.command](args, interruption)

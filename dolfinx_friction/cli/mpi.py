@@ -1,10 +1,14 @@
-"""What the MPI launcher says, read before MPI starts (nothing here imports mpi4py)."""
+"""MPI in a command-line process: what the launcher says, read before MPI starts (nothing
+here imports mpi4py), and :func:`start`, which starts it."""
 from __future__ import annotations
 
 import os
 import sys
+from types import ModuleType
+from typing import Mapping
 
-__all__ = ["LAUNCHER_RANKS", "LAUNCHER_SIZES", "rank", "ranks", "SINGLETON", "singleton_settings"]
+__all__ = ["LAUNCHER_RANKS", "LAUNCHER_SIZES", "rank", "ranks", "SINGLETON",
+           "singleton_settings", "start"]
 
 #: What MPI launchers (Open MPI, PMIx, MPICH's PMI, MVAPICH) set in each rank's
 #: environment to its rank, and to the number of ranks (MPICH: ranks on the node).
@@ -46,10 +50,26 @@ SINGLETON = {"OMPI_MCA_ess_singleton_isolated": "1", "OMPI_MCA_pml": "ob1",
              "OMPI_MCA_btl": "self"}
 
 
-def singleton_settings() -> None:
-    """Apply :data:`SINGLETON` (where the user set none of them) before mpi4py is imported,
-    in a process that no launcher started (none of its rank variables set); under a
-    launcher nothing changes."""
-    if not any(name in os.environ for name in LAUNCHER_RANKS):
-        for name, value in SINGLETON.items():
-            os.environ.setdefault(name, value)
+def singleton_settings(environ: Mapping[str, str] = os.environ) -> dict[str, str]:
+    """The :data:`SINGLETON` settings a process with the environment ``environ`` adds: none
+    under a launcher (one of its rank variables set), none the user set."""
+    if any(name in environ for name in LAUNCHER_RANKS):
+        return {}
+    return {name: value for name, value in SINGLETON.items() if name not in environ}
+
+
+def start() -> ModuleType:
+    """``mpi4py.MPI``, imported (MPI initialised) with :func:`singleton_settings`, which leave
+    the environment once MPI has read them: a process started from this one (an ``mpirun``
+    among them) inherits the environment this one was given (``btl = self`` would leave
+    its ranks no transport to each other)."""
+    if "mpi4py.MPI" in sys.modules:
+        return sys.modules["mpi4py.MPI"]
+    added = singleton_settings()
+    os.environ.update(added)
+    try:
+        from mpi4py import MPI
+    finally:
+        for name in added:
+            os.environ.pop(name, None)
+    return MPI

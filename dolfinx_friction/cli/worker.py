@@ -61,7 +61,7 @@ def warm() -> None:
     contact kernels), as a ``run`` would (MPI with :data:`~dolfinx_friction.cli.mpi.
     SINGLETON`); initialise numba (:func:`~dolfinx_friction.contact.backend.warm`)."""
     from dolfinx_friction.cli import frontend, mpi  # noqa: F401  (the commands)
-    mpi.singleton_settings()
+    mpi.start()
     import dolfinx_friction.scene.runner  # noqa: F401
     from dolfinx_friction.contact import backend
     backend.warm()

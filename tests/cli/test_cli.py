@@ -903,18 +903,35 @@ def test_bad_input_one_line_under_mpirun(workdir, case_id):
     assert not (workdir / "never").exists() and not (workdir / "ran_script").exists()
 
 
-def test_singleton_settings_only_without_a_launcher(monkeypatch):
+def test_singleton_settings_only_without_a_launcher():
     """A process no launcher started gets Open MPI's singleton settings where the user set
-    none (the user's own choice stays); under a launcher nothing is set."""
+    none (the user's own choice stays); under a launcher none."""
     from dolfinx_friction.cli import mpi
-    for name in (*mpi.LAUNCHER_RANKS, *mpi.SINGLETON):
-        monkeypatch.delenv(name, raising=False)
-    monkeypatch.setenv("OMPI_MCA_pml", "ucx")
-    mpi.singleton_settings()
-    assert os.environ["OMPI_MCA_pml"] == "ucx"
-    assert os.environ["OMPI_MCA_ess_singleton_isolated"] == "1"
-    for name in mpi.SINGLETON:
-        monkeypatch.delenv(name)
-    monkeypatch.setenv("OMPI_COMM_WORLD_RANK", "0")
-    mpi.singleton_settings()
-    assert not any(name in os.environ for name in mpi.SINGLETON)
+    assert mpi.singleton_settings({}) == mpi.SINGLETON
+    assert mpi.singleton_settings({"OMPI_MCA_pml": "ucx"}) == {
+        k: v for k, v in mpi.SINGLETON.items() if k != "OMPI_MCA_pml"}
+    assert mpi.singleton_settings({"OMPI_COMM_WORLD_RANK": "0"}) == {}
+
+
+def test_singleton_settings_leave_with_mpi_started():
+    """MPI is started by the command line (its modules import no mpi4py before) with the
+    singleton's settings (self transport only), which leave the environment again: an
+    mpirun started from that process runs ranks that talk to each other (with the settings
+    inherited they found no transport)."""
+    from dolfinx_friction.cli import mpi
+    env = {k: v for k, v in cli_env().items() if k not in (*mpi.SINGLETON, *mpi.LAUNCHER_RANKS)}
+    child = "from mpi4py import MPI; c = MPI.COMM_WORLD; print(c.allreduce(c.rank + 1))"
+    script = (
+        "import os, subprocess, sys\n"
+        "from dolfinx_friction.cli import frontend, mpi, worker\n"
+        "assert 'mpi4py.MPI' not in sys.modules and mpi.start().COMM_WORLD.size == 1\n"
+        "from dolfinx_friction import _compat as compat\n"
+        "print(sorted(set(mpi.SINGLETON) & set(os.environ)))\n"
+        f"cmd = [*compat.mpirun_command(2), sys.executable, '-c', {child!r}]\n"
+        "out = subprocess.run(cmd, env=compat.mpirun_environment(dict(os.environ)),\n"
+        "                     capture_output=True, text=True, timeout=120)\n"
+        "print(out.stdout.split(), out.returncode)\n")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          env=env, timeout=TIMEOUT)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.splitlines() == ["[]", "['3', '3'] 0"], proc.stdout + proc.stderr
