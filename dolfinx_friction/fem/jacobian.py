@@ -81,7 +81,7 @@ class BlockJacobian:
         self._zeroed: Optional[tuple] = None  # (key, slots of the constrained rows, columns)
         self._sources: Optional[tuple] = None  # (key, where the static values come from)
         self._static: Optional[tuple] = None  # (key, free obstacle rows, Jacobian without contact)
-        self._coupling_slots: Optional[tuple] = None  # (key, contacts' slots, zeroed ones)
+        self._coupling_slots: Optional[tuple] = None  # (key, slots, zeroed, contacts' positions)
         self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
         self._surface_dofs: Optional[np.ndarray] = None  # of all contacts and ranks (fixed)
         self._constrained: Optional[tuple] = None  # (constrained rows, their global dofs)
@@ -226,11 +226,12 @@ class BlockJacobian:
             slots = np.unique(np.concatenate([at for at, _ in gathered]
                                              + [np.zeros(0, np.int64)]))
             zeroed = np.isin(slots, self._zeroed_slots(rows, symmetric))
-            self._coupling_slots = cached = (key, slots, zeroed)
-        _, slots, zeroed = cached
+            positions = [np.searchsorted(slots, at) for at, _ in gathered]
+            self._coupling_slots = cached = (key, slots, zeroed, positions)
+        _, slots, zeroed, positions = cached
         contact = np.zeros(len(slots))
-        for at, sums in gathered:
-            contact[np.searchsorted(slots, at)] += sums
+        for at, (_, sums) in zip(positions, gathered):
+            contact[at] += sums
         contact[zeroed] = 0.0
         return slots, static[slots] + contact
 
