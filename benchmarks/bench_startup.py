@@ -13,8 +13,8 @@ minimum CPU time (user + system, ``RUSAGE_CHILDREN``) over the repeats:
 * ``interpreter``: ``python -c pass``;
 * imports, cumulatively in the order a run loads them, each row the CPU it adds:
   numpy, mpi4py (``MPI_Init``, with the command line's singleton settings,
-  ``cli.mpi.SINGLETON``), petsc4py, dolfinx (with ufl, basix, ffcx), scipy (sparse, k-d tree), numba, the
-  package's own modules (with the contact kernels);
+  ``cli.mpi.SINGLETON``), petsc4py, dolfinx (with ufl, basix, ffcx), scipy (sparse, k-d
+  tree), numba, the package's own modules (with the contact kernels);
 * in one process after those imports: numba's start (its typing and target contexts,
   which the first kernel call would set up), then the scene run twice through
   ``scene.run`` (all outputs written): the second run's CPU per phase

@@ -62,7 +62,8 @@ def start() -> ModuleType:
     """``mpi4py.MPI``, imported (MPI initialised) with :func:`singleton_settings`, which leave
     the environment once MPI has read them: a process started from this one (an ``mpirun``
     among them) inherits the environment this one was given (``btl = self`` would leave
-    its ranks no transport to each other)."""
+    its ranks no transport to each other).  Where mpi4py.MPI was imported already, MPI
+    started then, without these settings."""
     if "mpi4py.MPI" in sys.modules:
         return sys.modules["mpi4py.MPI"]
     added = singleton_settings()

@@ -8,8 +8,9 @@ Protocol (JSON lines): each line on stdin is the argv of one command (``["run", 
 ``{"status": exit status, "stderr": what the command printed on stderr}``, exactly what
 a fresh ``dolfinx-friction`` process would have given (its own stdout is discarded).  The
 worker ends at the end of stdin, or after a command that was interrupted (exit 130 or
-143: the sweep is being stopped), without the interpreter's teardown (:func:`leave`).  It imports what a run needs (:func:`warm`) before it
-reads its first line, while the sweep validates its points.  Nothing of a command stays
+143: the sweep is being stopped), without the interpreter's teardown (:func:`leave`).  It
+imports what a run needs (:func:`warm`) before it reads its first line, while the sweep
+validates its points.  Nothing of a command stays
 for the next one but the caches (imported modules, compiled kernels) and the run's
 :class:`~dolfinx_friction.scene.workspace.Workspace` (meshes, spaces, compiled forms and
 expressions, reused where the next point's scene agrees: results bit for bit those of a
@@ -81,8 +82,8 @@ def main() -> int:
 
 def leave(status: int) -> None:
     """End the process now, as :mod:`multiprocessing`'s workers end: the output flushed, but
-    not the interpreter's teardown of thousands of modules, PETSc and MPI (0.15 s of a
-    10-point sweep's 3.6 s on 2 cores, paid by every worker at its end).  Nothing is lost:
+    not the interpreter's teardown of thousands of modules, PETSc and MPI (0.15 s, which the
+    sweep waited for at its end).  Nothing is lost:
     every file of a point is complete and closed (its writer's memory folder removed)
     before the worker answers."""
     sys.stdout.flush()
