@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Optional
 
-__all__ = ["CONVERGENCE", "DIRECT_MAX_DOFS", "ITERATIVE", "LINEAR_KINDS", "NATIVE_MAX_DOFS",
+__all__ = ["CHORD", "CONVERGENCE", "DIRECT_MAX_DOFS", "ITERATIVE", "LINEAR_KINDS", "NATIVE_MAX_DOFS",
            "STALL_ITERATIONS", "choose", "factorisation", "unsafe_option"]
 
 #: Newton's convergence tests (:mod:`dolfinx_friction.nls.newton`)
@@ -14,6 +14,11 @@ CONVERGENCE = ("residual", "reactions")
 #: edge of a growing zone converge faster in halved increments (benchmarks/RESULTS.md;
 #: in converging solves off that kind the longest such run is 2)
 STALL_ITERATIONS = 6
+
+#: a Newton step of a finite-strain problem solves with the last factorisation (a chord
+#: step) where the last whole step, with no contact change, cut the residual to this
+#: share or less (:meth:`~dolfinx_friction.nls.newton.Newton._chord_step`; 0: never)
+CHORD = 0.1
 
 #: the kinds of linear solver a run may ask for (a scene's ``[solver] linear``)
 LINEAR_KINDS = ("auto", "direct", "iterative")

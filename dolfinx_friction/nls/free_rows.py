@@ -72,10 +72,14 @@ class FreeRows:
         return self._sub
 
     def solve(self, solve, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec,
-              constrained: np.ndarray) -> bool:
+              constrained: np.ndarray, again: bool = False) -> bool:
         """``solve(A, b, x)`` on the free rows (``x`` zero in the constrained ones);
-        returns what it returned."""
-        A = self.matrix(J, constrained)
+        returns what it returned.  ``again``: with the submatrix of the last call as it
+        was (not refilled from ``J``)."""
+        if again:
+            A = self._sub if self._reduces else J
+        else:
+            A = self.matrix(J, constrained)
         if A is J:
             return solve(J, b, x)
         b_free = b.getSubVector(self._rows)

@@ -171,13 +171,16 @@ class Interior:
         return self._B
 
     def solve(self, solve: Callable, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec,
-              constrained: np.ndarray, interior: np.ndarray) -> Optional[bool]:
+              constrained: np.ndarray, interior: np.ndarray, again: bool = False
+              ) -> Optional[bool]:
         """``solve(A, b, x)`` on the condensed system, then ``x`` in every row; None (``x``
-        untouched) where the path is not taken (``D`` too large, no interior)."""
-        self._set_up(J, constrained, interior)
+        untouched) where the path is not taken (``D`` too large, no interior).  ``again``:
+        with the condensed matrix of the last call as it was (not refilled from ``J``)."""
+        if not again:
+            self._set_up(J, constrained, interior)
         if not self._usable:
             return None
-        B = self._matrix(J)
+        B = self._B if again else self._matrix(J)
         bv = b.getArray(readonly=True)
         self._rI.setArray(bv[self.I])
         self._ksp.solve(self._rI, self._yI)  # y_I = K_II^-1 b_I

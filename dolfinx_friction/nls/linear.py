@@ -48,7 +48,9 @@ meets linear ones (serial), the linear bodies' interior is condensed out as well
 factorisation kept for the run (:mod:`~dolfinx_friction.nls.interior`).  A factorisation
 of a nonlinear body's Jacobian kept as GMRES's preconditioner (``reuse``) does not pay
 there: 10-18 GMRES iterations per Jacobian on the ironing, each a tenth of a fresh
-factorisation.
+factorisation.  What pays there is Newton's chord step (:meth:`LinearSolver.solve_again`):
+one back-solve with the last fresh factorisation, the Jacobian neither assembled nor
+filled, through the same free rows and condensed interior.
 An iterative solver (:data:`~dolfinx_friction.nls.defaults.ITERATIVE`: GMRES with
 algebraic multigrid, or any Krylov solver the options give without ``ksp_rtol``) stops at
 the relative residual Newton asks for each step (inexact Newton);
@@ -156,6 +158,12 @@ class LinearSolver:
         self._free_rows = FreeRows()
         self._operator_sizes: Optional[tuple] = None  # of the matrix the KSP last had
         self._interior: Optional[Interior] = None
+        #: (J, constrained, constant) of the last solve where it factorised J afresh and
+        #: succeeded: what :meth:`solve_again` solves with
+        self._last: Optional[tuple] = None
+        self._fresh = False  # the last attempt factorised
+        #: solves with the last factorisation by :meth:`solve_again`
+        self.chord_solves = 0
 
     def _configured(self, comm, reuse: bool) -> PETSc.KSP:
         """A KSP with this solver's defaults and options under a prefix of its own."""
@@ -204,6 +212,7 @@ class LinearSolver:
                                      self._solve_flops):
             return None
         self.condensed_solves += 1
+        self._last = None
         return True
 
     def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL,
@@ -219,18 +228,49 @@ class LinearSolver:
         the same in every ``J`` of the run (:meth:`BlockProblem.linear_interior`), condensed
         out with their factorisation kept (:class:`~dolfinx_friction.nls.interior.Interior`)
         where that path is taken."""
+        self._last = None
         if constrained is None or not self._factorises:
-            return self._solve(J, b, x, rtol)
-
-        def solve(A: PETSc.Mat, b_: PETSc.Vec, x_: PETSc.Vec) -> bool:
-            return self._solve(A, b_, x_, rtol)
-        if constant is not None and len(constant):
-            if self._interior is None:
+            ok = self._solve(J, b, x, rtol)
+        else:
+            if constant is not None and len(constant) and self._interior is None:
                 self._interior = Interior(self.ksp.getOptionsPrefix())
-            ok = self._interior.solve(solve, J, b, x, constrained, constant)
+            ok = self._restricted(lambda A, b_, x_: self._solve(A, b_, x_, rtol), J, b, x,
+                                  constrained, constant, again=False)
+        if ok and self._fresh and self._factorises:
+            self._last = (J, constrained, constant)
+        return ok
+
+    def solve_again(self, b: PETSc.Vec, x: PETSc.Vec) -> bool:
+        """Solve with the matrix and the factorisation of the last :meth:`solve` (a chord
+        step of Newton's: nothing is assembled or factorised, one back-solve); False where
+        the last solve left none (it failed, kept an older factorisation, or did not
+        factorise) or the back-solve failed."""
+        if self._last is None:
+            return False
+        J, constrained, constant = self._last
+        if constrained is None:
+            ok = self._back_solve(b, x)
+        else:
+            ok = self._restricted(lambda A, b_, x_: self._back_solve(b_, x_), J, b, x,
+                                  constrained, constant, again=True)
+        self.chord_solves += 1
+        return ok
+
+    def _restricted(self, solve, J, b, x, constrained, constant, again: bool) -> bool:
+        """``solve(A, b_, x_)`` on the free rows, with the linear interior condensed out
+        where that path is taken; ``again``: with the matrices of the last call."""
+        if constant is not None and len(constant):
+            ok = self._interior.solve(solve, J, b, x, constrained, constant, again)
             if ok is not None:
                 return ok
-        return self._free_rows.solve(solve, J, b, x, constrained)
+        return self._free_rows.solve(solve, J, b, x, constrained, again)
+
+    def _back_solve(self, b: PETSc.Vec, x: PETSc.Vec) -> bool:
+        """``x`` from the factorisation the solver holds (its operator unchanged)."""
+        self.ksp.setType("preonly")  # (a kept factorisation's GMRES sets its type again)
+        self.ksp.getPC().setReusePreconditioner(True)
+        self.ksp.solve(b, x)
+        return self.ksp.getConvergedReason() > 0
 
     def _solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float) -> bool:
         """One solve of the system as given (with a kept factorisation where it pays)."""
@@ -263,6 +303,7 @@ class LinearSolver:
         self.ksp.setOperators(J, J)
         self.ksp.getPC().setReusePreconditioner(keep)
         self.ksp.solve(b, x)
+        self._fresh = not keep
         if not keep:
             self.factorisations += 1
             self._factored_size = J.getSize()

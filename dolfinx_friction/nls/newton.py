@@ -7,7 +7,12 @@ solves with the Jacobian.  Converged (``convergence="residual"``, the default): 
 residual norm is below ``max(rtol r_0, atol)`` or below its round-off floor.
 ``convergence="reactions"`` also stops when the reactions and the displacements no
 longer change (:func:`settled`).  The line search halves the step (at most 5 times,
-the pairing frozen) while the residual norm does not decrease.
+the pairing frozen) while the residual norm does not decrease.  Where a body's Jacobian
+changes with the displacement (finite strain), a step after a whole step that changed no
+contact status and cut the residual to :data:`~dolfinx_friction.nls.defaults.CHORD` of
+its value or less solves with the last factorisation instead (a chord step: no Jacobian is
+assembled or factorised; the next step takes a new one where the chord step contracted
+less); the convergence test is the same.
 """
 from __future__ import annotations
 
@@ -20,7 +25,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction.nls.linear import (KRYLOV_RTOL, LinearSolver, forget_options,
                                      write_options)
-from dolfinx_friction.nls.defaults import CONVERGENCE, STALL_ITERATIONS, factorisation
+from dolfinx_friction.nls.defaults import CHORD, CONVERGENCE, STALL_ITERATIONS, factorisation
 from dolfinx_friction.fem.block_problem import BlockProblem
 
 
@@ -70,7 +75,9 @@ class Newton:
     norm test alone) or ``"reactions"`` (that test, or the reactions and displacements
     settled to ``reaction_tol``: :func:`settled`).  ``stall``: with ``solve(may_stall=True)``,
     give up after that many iterations without a new lowest residual (0: never; default
-    :data:`~dolfinx_friction.nls.defaults.STALL_ITERATIONS`).
+    :data:`~dolfinx_friction.nls.defaults.STALL_ITERATIONS`).  ``chord``: the contraction
+    below which a finite-strain problem's next step reuses the last factorisation (0:
+    never, a new Jacobian in every step; :meth:`_chord_step`).
     """
 
     def __init__(self, rtol: float = 1e-9, atol: float = 1e-10, max_iterations: int = 30,
@@ -78,14 +85,14 @@ class Newton:
                  petsc_options: Optional[dict] = None,
                  reuse_factorisation: Optional[bool] = None,
                  convergence: str = "residual", reaction_tol: float = 1e-5,
-                 stall: int = STALL_ITERATIONS):
+                 stall: int = STALL_ITERATIONS, chord: float = CHORD):
         if convergence not in CONVERGENCE:
             raise ValueError(f"convergence = {convergence!r}: must be one of "
                              f"{', '.join(map(repr, CONVERGENCE))}")
         self.convergence, self.reaction_tol = convergence, reaction_tol
         self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
         self.line_search = line_search
-        self.stall = stall
+        self.stall, self.chord = stall, chord
         self.prefix, self.petsc_options = prefix, petsc_options
         self.reuse_factorisation = reuse_factorisation
         self.linear: Optional[LinearSolver] = None
@@ -156,9 +163,14 @@ class Newton:
                 trace.reason = f"no new lowest residual in {self.stall} iterations"
                 break
             solver = self._solver(problem)
-            split = problem.split() if solver.reuse else None
+            solved = None
+            if self._chord_step(problem, trace):
+                with problem.timers.measure("linear_solve"):
+                    solved = solver.solve_again(b, dx) or None
+            split = problem.split() if solver.reuse and solved is None else None
             with problem.timers.measure("linear_solve"):
-                solved = solver.solve_split(split, b, dx) if split is not None else None
+                if split is not None:
+                    solved = solver.solve_split(split, b, dx)
             if solved is None:  # no split, or it did not pay: the whole Jacobian
                 A = problem.jacobian(x, symmetric=solver.symmetric)
                 with problem.timers.measure("linear_solve"):
@@ -181,6 +193,17 @@ class Newton:
         if trace.converged:
             problem.check_held()
         return trace
+
+    def _chord_step(self, problem: BlockProblem, trace: NewtonTrace) -> bool:
+        """Whether the next step solves with the last factorisation instead of a new
+        Jacobian: where a body's Jacobian changes with ``x`` (:attr:`BlockProblem.linear`
+        false), the last step was whole, changed no slave node's status or master face,
+        and cut the residual by at least :attr:`chord` (``r_k <= chord r_k-1``: the
+        Jacobian barely moved along it)."""
+        r = trace.residuals
+        return (self.chord > 0.0 and not problem.linear and len(r) >= 2
+                and trace.backtracks[-1] == 0 and trace.status_changes[-1] == 0
+                and trace.face_changes[-1] == 0 and r[-1] <= self.chord * r[-2])
 
     def target(self, problem: BlockProblem, first: float) -> float:
         """The residual norm that converges at the last evaluated iterate (collective):

@@ -66,7 +66,7 @@ class RunSummary:
     timers: Timers = field(default_factory=Timers)
     failure: str = ""
     #: the linear solver's work: ``preconditioner_setups``, ``krylov_iterations``,
-    #: ``condensed_solves`` (empty before a run; None if no solver ran)
+    #: ``condensed_solves``, ``chord_solves`` (empty before a run; None if no solver ran)
     linear_solves: Optional[dict] = field(default_factory=dict)
 
 
@@ -275,7 +275,8 @@ class Solver:
         return None if linear is None else {
             "preconditioner_setups": linear.factorisations,
             "krylov_iterations": linear.krylov_iterations,
-            "condensed_solves": linear.condensed_solves}
+            "condensed_solves": linear.condensed_solves,
+            "chord_solves": linear.chord_solves}
 
     # ----------------------------------------------------------- reports
     def _report(self, index: int, name: str, record: IncrementRecord, wall: float) -> Increment:
