@@ -5,7 +5,8 @@ residual below ``reaction_tol`` of the force scale, the corrections contracting,
 contact change, the whole step taken).  It must give the strict test's reactions in
 no more iterations (fewer on two of the three demos), serially and under ``mpirun -n 2``
 (the issue's bar is 1e-6 relative in every increment; measured 1.6e-12 .. 1.7e-9,
-asserted 1e-8).
+asserted 1e-8).  Chord steps (finite strain) give the answer of a new Jacobian in every
+step with fewer factorisations.
 """
 from __future__ import annotations
 
@@ -13,8 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mpi4py import MPI
 
-from dolfinx_friction import Newton
+from dolfinx_friction import Newton, solve_steps
 from dolfinx_friction.scene.runner import run
 from dolfinx_friction.scene.model import Step
 from dolfinx_friction.scene.toml import SceneError, load_scene
@@ -74,3 +76,27 @@ def test_stalled_increments_are_cut_back_to_the_same_answer():
     assert runs[1].summary.cutbacks > runs[0].summary.cutbacks
     with pytest.raises(SceneError, match=r"step.stall_iterations"):
         Step("press", stall_iterations=-1)
+
+
+def test_chord_steps_give_the_newton_answer_with_fewer_factorisations():
+    """A Neo-Hookean block pressed onto a Neo-Hookean foundation and slid with friction:
+    Newton with chord steps (the default; the last factorisation solves a step after a
+    whole one that changed no contact status and cut the residual tenfold) reaches the
+    displacements of a new Jacobian in every step (``chord=0``) to the convergence test's
+    precision (measured 4e-14 of the largest) in fewer factorisations (13 -> 6)."""
+    from tests.fem.test_contact_api import block_and_foundation, two_bodies
+    spaces = block_and_foundation(1, 1)
+    answers, work = [], []
+    for newton in (Newton(chord=0.0), Newton()):
+        problem, _, g = two_bodies(spaces=spaces)
+        solve_steps(problem, lambda t: g.value.__setitem__(slice(None), (0.0, -0.03 * t)), 3,
+                    newton=newton)
+        solve_steps(problem, lambda t: g.value.__setitem__(slice(None), (0.02 * t, -0.03)), 2,
+                    newton=newton)
+        answers.append(problem.x.getArray().copy())
+        work.append((newton.linear.factorisations, newton.linear.chord_solves))
+    scale = MPI.COMM_WORLD.allreduce(np.abs(answers[0]).max(), op=MPI.MAX)
+    worst = MPI.COMM_WORLD.allreduce(np.abs(answers[1] - answers[0]).max(), op=MPI.MAX)
+    assert worst < 1e-9 * scale
+    (exact, none), (chord, solves) = work
+    assert none == 0 and solves > 0 and chord < exact
