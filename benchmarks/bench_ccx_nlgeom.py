@@ -110,6 +110,12 @@ def _rel(a: float, b: float) -> str:
     return f"{100 * abs(a / b - 1):.3f} %"
 
 
+def _factorised(numbers: dict) -> str:
+    """Our factorisations of a run (``timed_run``'s numbers)."""
+    setups = (numbers.get("linear_solves") or {}).get("preconditioner_setups")
+    return "-" if setups is None else str(setups)
+
+
 def _step_inc(k) -> str:
     return "-" if k is None else f"({k[0]}, {k[1]})"
 
@@ -136,9 +142,11 @@ def before_after(rows, before: dict) -> list[str]:
         trs.append([r["case"], f"{b['cpu']:.2f} / {o['cpu']:.2f}",
                     f"{b['ccx_cpu']:.2f} / {r['ccx_cpu']:.2f}",
                     f"{b['cpu'] / b['ccx_cpu']:.2f} / {o['cpu'] / r['ccx_cpu']:.2f}",
-                    f"{b['newton']} / {o['newton']}", f"{moved:.1e}"])
+                    f"{b['newton']} ({b.get('factorisations', '-')}) / {o['newton']} "
+                    f"({_factorised(o)})", f"{moved:.1e}"])
     out.append(B.table(["case", "our CPU [s] before / after", "ccx CPU [s] before / after",
-                        "CPU ratio to ccx before / after", "Newton its before / after",
+                        "CPU ratio to ccx before / after",
+                        "Newton its (factorised) before / after",
                         "max dR after vs before"], trs, "lrrrrr"))
     return out
 
@@ -147,7 +155,9 @@ def saved(rows, load: float, label: str) -> dict:
     """What ``--save`` writes: the rows' times, iterations and reactions."""
     return {"commit": label or B.machine()["commit"], "load": load,
             "rows": {r["case"]: {"cpu": r["ours"]["cpu"], "ccx_cpu": r["ccx_cpu"],
-                                 "newton": r["ours"]["newton"], "reactions": r["reactions"]}
+                                 "newton": r["ours"]["newton"],
+                                 "factorisations": _factorised(r["ours"]),
+                                 "reactions": r["reactions"]}
                      for r in rows}}
 
 
@@ -162,7 +172,8 @@ def report(rows, machine, load_end, quick) -> str:
         f"* {B.machine_line(machine, load_end)}",
         "* ours = the whole `run()` after an untimed one-increment warm-up (form compilation); "
         "ccx = the whole `ccx` process.  CPU: our process / the ccx child (`RUSAGE_CHILDREN`).  "
-        "Iterations: our Newton iterations / ccx's factorisations (one per iteration), all "
+        "Iterations: our Newton iterations (of them factorised: the others are chord steps "
+        "with the last factorisation) / ccx's factorisations (one per iteration), all "
         "increments (ccx: fixed increments, `*STATIC, DIRECT`, it cannot cut back).",
         "* dR: the worst `|R - R_ccx| / |R_ccx|` over the increments and both reaction groups.  "
         "Press + shear: the last press and the last shear increment.  Ironing: F_press = "
@@ -183,7 +194,8 @@ def report(rows, machine, load_end, quick) -> str:
         trs.append([r["case"], f"{o['dofs']:,}", B.fmt_s(o["wall"]), B.fmt_s(o["cpu"]),
                     B.fmt_s(r["ccx_wall"]), B.fmt_s(r["ccx_cpu"]),
                     f"{100 * r['worst']:.3f}", ", ".join(diffs),
-                    f"{o['newton']} / {r['ccx_solves']} ({o['increments']} incs, "
+                    f"{o['newton']} ({_factorised(o)}) / {r['ccx_solves']} "
+                    f"({o['increments']} incs, "
                     f"{o['cutbacks']} cutbacks)", _step_inc(r["worst_at"])])
     out.append(B.table(["case", "dofs", "our wall [s]", "our CPU [s]", "ccx wall [s]",
                         "ccx CPU [s]", "max dR [%]", "differences", "iterations ours / ccx",
