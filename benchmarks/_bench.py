@@ -2,7 +2,9 @@
 
 * One thread per process (``OMP_NUM_THREADS`` etc. set before numpy/PETSc load),
   so that CPU time is compute time and CalculiX (run with 1 thread) is compared
-  like for like.
+  like for like; numpy without huge-page advice, as the command line starts it
+  (:mod:`dolfinx_friction.cli.environment`): a run in a benchmark's process is timed
+  as ``dolfinx-friction run`` would run it.
 * :func:`timed_run` runs a scene in memory and returns the numbers the
   benchmarks tabulate.  Phase times come from the solver's own timers, which
   record this process's CPU time (:func:`time.process_time`) next to the wall
@@ -49,6 +51,11 @@ WORK = Path(os.environ.get("BENCH_WORK", "/tmp/dolfinx_friction_bench"))
 for _p in (str(ROOT), str(DEMOS)):
     if _p not in sys.path:
         sys.path.insert(0, _p)
+
+from dolfinx_friction.cli import environment  # noqa: E402  (imports no numpy)
+
+if not environment.prepare():  # pragma: no cover - a benchmark that imported numpy first
+    raise SystemExit("benchmarks/_bench.py must be imported before numpy")
 
 #: the interpreter that has pyvista (the demos import it) and dolfinx
 PYTHON = sys.executable

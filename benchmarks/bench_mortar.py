@@ -29,10 +29,9 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import _bench as B  # noqa: E402
+import _bench as B  # noqa: E402  (before numpy: its settings)
+import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TITLE = "Mortar distribution of the slave forces: cost and effect (issue #26 item 2)"

@@ -30,9 +30,8 @@ import sys
 import time
 from pathlib import Path
 
+import _bench as B  # noqa: I001  (before numpy: its settings)
 import numpy as np
-
-import _bench as B  # noqa: I001
 
 import bench_cost as C
 from dolfinx_friction.reference.cases import block_on_foundation_toml

@@ -1,12 +1,17 @@
-"""Shared fixtures: the suite runs serially and under ``mpirun -n 2``."""
+"""Shared fixtures: the suite runs serially and under ``mpirun -n 2``, numpy started as the
+command line starts it (without huge-page advice: :mod:`dolfinx_friction.cli.environment`)."""
 from __future__ import annotations
 
 import shutil
 import tempfile
 from pathlib import Path
 
-import pytest
-from mpi4py import MPI
+from dolfinx_friction.cli import environment
+
+environment.prepare()  # before numpy is imported
+
+import pytest  # noqa: E402
+from mpi4py import MPI  # noqa: E402
 
 
 @pytest.fixture

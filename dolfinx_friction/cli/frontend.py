@@ -4,7 +4,8 @@
 One parser; one handling of errors: one line on stderr (from rank 0), the exit status of
 :mod:`~dolfinx_friction.cli.exits` (``--debug`` lets every exception through, with its
 traceback); one signal handler (:mod:`~dolfinx_friction.cli.signals`); the MPI launcher read
-in one place (:mod:`~dolfinx_friction.cli.mpi`).  The commands themselves:
+in one place (:mod:`~dolfinx_friction.cli.mpi`), numpy's settings set before it starts
+(:mod:`~dolfinx_friction.cli.environment`).  The commands themselves:
 :mod:`~dolfinx_friction.cli.commands`.
 """
 from __future__ import annotations
@@ -18,7 +19,7 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 from dolfinx_friction import __version__
-from dolfinx_friction.cli import commands, mpi, signals
+from dolfinx_friction.cli import commands, environment, mpi, signals
 from dolfinx_friction.cli.exits import EXIT_INPUT, EXIT_INTERNAL, classify, error, signal_status
 from dolfinx_friction.errors import Interrupted
 from dolfinx_friction.scene.workspace import Workspace
@@ -175,6 +176,7 @@ def main(argv: Optional[Sequence[str]] = None, workspace: Optional[Workspace] = 
     """Run the command line ``argv`` (default: ``sys.argv[1:]``); the exit status.
     ``workspace``: what a ``run`` keeps for the next one in this process (a sweep's
     worker, :mod:`~dolfinx_friction.cli.worker`)."""
+    environment.prepare()  # before anything imports numpy
     args = _parser().parse_args(argv)
     args.workspace = workspace
     _quiet_libraries(args.debug)

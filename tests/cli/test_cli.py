@@ -935,3 +935,25 @@ def test_singleton_settings_leave_with_mpi_started():
                           env=env, timeout=TIMEOUT)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.splitlines() == ["[]", "['3', '3'] 0"], proc.stdout + proc.stderr
+
+
+def test_numpy_starts_without_huge_page_advice():
+    """The command line sets numpy's ``NUMPY_MADVISE_HUGEPAGE=0`` before anything imports
+    numpy (its modules import none before ``main``; numpy reads it once, at import), and
+    keeps a value the user set."""
+    from dolfinx_friction.cli import environment
+    env = {k: v for k, v in cli_env().items() if k not in environment.NUMPY}
+    script = (
+        "import os, sys\n"
+        "from dolfinx_friction.cli import frontend\n"
+        "assert 'numpy' not in sys.modules\n"
+        f"status = frontend.main(['check', {str(ROOT / 'demos' / 'incline.toml')!r}])\n"
+        "assert 'numpy' in sys.modules\n"
+        "print(status, os.environ['NUMPY_MADVISE_HUGEPAGE'])\n")
+    for given, expected in ((None, "0"), ("1", "1")):
+        proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                              env={**env, **({} if given is None else
+                                             {"NUMPY_MADVISE_HUGEPAGE": given})},
+                              timeout=TIMEOUT)
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stdout.split()[-2:] == ["0", expected], proc.stdout + proc.stderr

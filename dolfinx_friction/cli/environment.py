@@ -1,0 +1,31 @@
+"""Settings a command-line process gives the libraries it starts, before they read them
+(nothing here imports them).
+
+numpy asks the kernel for transparent huge pages on every array of 4 MiB or more
+(``madvise``); where the kernel's ``defrag`` setting is ``madvise`` (Debian's default), a
+page fault in such an array compacts memory on the spot when no free huge page is left.
+On a machine whose memory is fragmented (any that has run for a while) that made each
+fault cost ~0.3 ms of system time: a fresh 10 MB array took 80-170 ms to fill instead of 2,
+a third of the 35k-dof 3D block's run (benchmarks/RESULTS.md, "Huge pages").  A
+command-line process therefore starts numpy without that advice (:data:`NUMPY`), unless
+the user set it; a script sets ``NUMPY_MADVISE_HUGEPAGE=0`` itself.
+"""
+from __future__ import annotations
+
+import os
+import sys
+from typing import MutableMapping
+
+__all__ = ["NUMPY", "prepare"]
+
+#: numpy without its huge-page advice (read once, when numpy is imported)
+NUMPY = {"NUMPY_MADVISE_HUGEPAGE": "0"}
+
+
+def prepare(environ: MutableMapping[str, str] = os.environ) -> bool:
+    """Put :data:`NUMPY` into ``environ`` where the user has not set its variables; whether
+    it takes effect (numpy not imported yet: a process started with it, as the sweep's
+    workers are, inherits it too)."""
+    for name, value in NUMPY.items():
+        environ.setdefault(name, value)
+    return "numpy" not in sys.modules
