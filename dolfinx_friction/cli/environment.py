@@ -6,9 +6,9 @@ numpy asks the kernel for transparent huge pages on every array of 4 MiB or more
 page fault in such an array compacts memory on the spot when no free huge page is left.
 On a machine whose memory is fragmented (any that has run for a while) that made each
 fault cost ~0.3 ms of system time: a fresh 10 MB array took 80-170 ms to fill instead of 2,
-a third of the 35k-dof 3D block's run (benchmarks/RESULTS.md, "Huge pages").  A
-command-line process therefore starts numpy without that advice (:data:`NUMPY`), unless
-the user set it; a script sets ``NUMPY_MADVISE_HUGEPAGE=0`` itself.
+a third of the 35k-dof 3D block's run (benchmarks/RESULTS.md, "Huge pages: numpy's advice
+on and off").  A command-line process therefore starts numpy without that advice
+(:data:`NUMPY`), unless the user set it; a script sets ``NUMPY_MADVISE_HUGEPAGE=0`` itself.
 """
 from __future__ import annotations
 
