@@ -54,8 +54,9 @@ for _p in (str(ROOT), str(DEMOS)):
 
 from dolfinx_friction.cli import environment  # noqa: E402  (imports no numpy)
 
-if not environment.prepare():  # pragma: no cover - a benchmark that imported numpy first
-    raise SystemExit("benchmarks/_bench.py must be imported before numpy")
+if not environment.prepare():  # pragma: no cover - a script that imported numpy first
+    raise SystemExit("benchmarks/_bench.py must be imported before numpy (or start Python "
+                     "with NUMPY_MADVISE_HUGEPAGE set)")
 
 #: the interpreter that has pyvista (the demos import it) and dolfinx
 PYTHON = sys.executable

@@ -23,9 +23,11 @@ NUMPY = {"NUMPY_MADVISE_HUGEPAGE": "0"}
 
 
 def prepare(environ: MutableMapping[str, str] = os.environ) -> bool:
-    """Put :data:`NUMPY` into ``environ`` where the user has not set its variables; whether
-    it takes effect (numpy not imported yet: a process started with it, as the sweep's
-    workers are, inherits it too)."""
+    """Put :data:`NUMPY` into ``environ`` where the user has not set its variables (a
+    process started from this one, as the sweep's workers are, inherits them); whether
+    numpy runs with what ``environ`` says: it is not imported yet, or the variables were
+    set already (by whoever started this process)."""
+    given = all(name in environ for name in NUMPY)
     for name, value in NUMPY.items():
         environ.setdefault(name, value)
-    return "numpy" not in sys.modules
+    return given or "numpy" not in sys.modules
