@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Optional
 
-__all__ = ["CHORD", "CONVERGENCE", "DIRECT_MAX_DOFS", "ITERATIVE", "LINEAR_KINDS", "NATIVE_MAX_DOFS",
-           "STALL_ITERATIONS", "choose", "factorisation", "unsafe_option"]
+__all__ = ["CHORD", "CONVERGENCE", "DIRECT_MAX_DOFS", "ITERATIVE", "LINEAR_KINDS",
+           "NATIVE_MAX_DOFS", "STALL_ITERATIONS", "choose", "factorisation", "unsafe_option"]
 
 #: Newton's convergence tests (:mod:`dolfinx_friction.nls.newton`)
 CONVERGENCE = ("residual", "reactions")

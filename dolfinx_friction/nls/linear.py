@@ -266,11 +266,15 @@ class LinearSolver:
         return self._free_rows.solve(solve, J, b, x, constrained, again)
 
     def _back_solve(self, b: PETSc.Vec, x: PETSc.Vec) -> bool:
-        """``x`` from the factorisation the solver holds (its operator unchanged)."""
-        self.ksp.setType("preonly")  # (a kept factorisation's GMRES sets its type again)
+        """``x`` from the factorisation the solver holds (its operator unchanged); the
+        Krylov method is left as it was (a user's, around a factorisation)."""
+        kind = self.ksp.getType()
+        self.ksp.setType("preonly")
         self.ksp.getPC().setReusePreconditioner(True)
         self.ksp.solve(b, x)
-        return self.ksp.getConvergedReason() > 0
+        ok = self.ksp.getConvergedReason() > 0
+        self.ksp.setType(kind)
+        return ok
 
     def _solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float) -> bool:
         """One solve of the system as given (with a kept factorisation where it pays)."""
