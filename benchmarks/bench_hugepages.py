@@ -75,6 +75,7 @@ def one(case: str) -> dict:
 
 
 def best(runs: list[dict], key: str) -> float:
+    """The lowest ``key`` of ``runs``."""
     return min(r[key] for r in runs)
 
 
@@ -123,7 +124,7 @@ def main(argv=None) -> int:
                      " / ".join(f"{r['cpu']:.2f}" for r in off),
                      f"{best(off, 'cpu') / best(on, 'cpu'):.2f}",
                      f"{best(on, 'system'):.2f} / {best(off, 'system'):.2f}",
-                     f"{min(r['faults'] for r in on):,} / {min(r['faults'] for r in off):,}",
+                     f"{best(on, 'faults'):,} / {best(off, 'faults'):,}",
                      "yes" if all(r["reactions"] == on[0]["reactions"] for r in on + off)
                      else "no"])
     text = "\n".join([

@@ -12,11 +12,11 @@ from tests.fem.test_contact_api import press_and_slide, two_bodies
 
 
 def test_a_converged_increment_passes_and_a_corrupted_one_does_not():
-    """After a frictional slide every body balances far within the bound (measured below
-    2e-2 of it: a chord step's linear convergence lands nearer the tolerance than a Newton
-    step's); the same state with the block's displacement scaled by 1.001 (its
-    reactions and contact forces no longer the converged ones) leaves it unbalanced by
-    far more, and the postcondition names it."""
+    """After a frictional slide every body balances far within the bound (measured at most
+    1.8e-2 of it on 1-3 ranks and in sid: a chord step's linear convergence lands nearer
+    the tolerance than a Newton step's); the same state with the block's displacement
+    scaled by 1.001 (its reactions and contact forces no longer the converged ones) leaves
+    it unbalanced by far more, and the postcondition names it."""
     problem, contact, g = two_bodies()
     records = press_and_slide(problem, contact, g)
     newton = dolfinx_friction.Newton()
@@ -24,7 +24,7 @@ def test_a_converged_increment_passes_and_a_corrupted_one_does_not():
     allowed = np.sqrt(problem.free_rows()) * tolerance
     assert problem.postcondition(tolerance) == ""
     assert (np.abs(problem.imbalance()) <= 1e-2 * allowed).all()
-    assert all(r.imbalance <= 0.1 * np.sqrt(problem.free_rows()).max() * tolerance
+    assert all(r.imbalance <= 5e-2 * np.sqrt(problem.free_rows()).max() * tolerance
                for r in records)
     corrupted = problem.x.copy()
     values = corrupted.getArray()
