@@ -13,6 +13,7 @@ entries instead (:class:`JacobianSplit`, for the condensed solve).
 """
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Optional
 
@@ -62,7 +63,9 @@ class BlockJacobian:
     """
 
     def __init__(self, problem: BlockProblem, homogeneous: list[int]):
-        self.problem = problem
+        # the problem owns this object: a strong reference back would make a cycle, and
+        # the problem's matrices would wait for the collector's rare full pass
+        self.problem = weakref.proxy(problem)
         self.base, values = self._bulk_pattern()
         #: each linear body's values in :attr:`base`
         self.linear_data = {k: self.base.gather_values(k, values[k])

@@ -94,7 +94,8 @@ class FreeRows:
         return ok
 
     def destroy(self) -> None:
+        """Destroy its index set and submatrix (collective); the next solve makes them."""
         self._forget()
         if self._rows is not None:
             self._rows.destroy()
-            self._rows = None
+        self._rows = self._constrained = None

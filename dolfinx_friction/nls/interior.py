@@ -130,6 +130,13 @@ class Interior:
         self._yI, self._rS = self.K_SI.createVecs()  # sizes |I|, |S|
         self._xS, self._rI = self.K_IS.createVecs()  # sizes |S|, |I|
 
+    def destroy(self) -> None:
+        """Destroy its factorisation, matrices and vectors; the next solve sets up afresh."""
+        for name in ("_ksp", "_B", "K_SI", "K_IS", "_yI", "_rS", "_xS", "_rI"):
+            obj = getattr(self, name, None)
+            if obj is not None:
+                obj.destroy()
+
     def _matrix(self, J: PETSc.Mat) -> PETSc.Mat:
         """``J_PP - D``, its pattern made once per pattern of ``J``."""
         key = (J, J.getInfo()["nz_allocated"])

@@ -85,7 +85,7 @@ from __future__ import annotations
 
 import itertools
 import weakref
-from typing import Optional
+from typing import Iterable, Optional
 
 import numpy as np
 from petsc4py import PETSc
@@ -198,6 +198,20 @@ class LinearSolver:
                     self.ksp.getOptionsPrefix() + "pc_factor_mat_ordering_type", "nd")
         out["reuse_factorisation"] = self.reuse
         return out
+
+    def release(self) -> None:
+        """Free the factorisations and matrices this solver keeps (collective): its counts
+        and :meth:`settings` stay, and its next solve factorises afresh.  (petsc4py leaves
+        a PETSc object that Python collected to ``PETSc.garbage_cleanup``: a solver that is
+        only dropped keeps its factorisations until then.)"""
+        self.ksp.reset()
+        self._operator_sizes = self._factored_size = self._last = None
+        self._pays = False
+        self._free_rows.destroy()
+        for part in (self._condensed, self._interior):
+            if part is not None:
+                part.destroy()
+        self._condensed = self._interior = None
 
     def solve_split(self, split, b: PETSc.Vec, x: PETSc.Vec) -> Optional[bool]:
         """Solve with the Jacobian given as bulk plus contact
@@ -344,6 +358,15 @@ class LinearSolver:
         return reason > 0 and not self.failure
 
 
+def release_garbage(comms: Iterable) -> None:
+    """Destroy the PETSc objects Python has collected on each of ``comms`` (mpi4py or
+    PETSc communicators; collective on each, in the same order on every rank): petsc4py
+    leaves them to ``PETSc.garbage_cleanup``, so a long process that never calls it keeps
+    every dropped matrix and factorisation."""
+    for comm in comms:
+        PETSc.garbage_cleanup(comm)
+
+
 def write_options(prefix: str, options: dict) -> list[str]:
     """Write ``options`` into PETSc's options database under ``prefix`` where it does not
     have them yet (the command line wins); returns the names written."""
@@ -431,7 +454,7 @@ class Condensed:
         self.outer.setTolerances(rtol=1e-10, atol=0.0, max_it=10)
         pc = self.outer.getPC()
         pc.setType("python")
-        pc.setPythonContext(self)
+        pc.setPythonContext(_Callbacks(self))
         self.outer.setFromOptions()
         self._K: Optional[PETSc.Mat] = None
         self._regular = False  # K's factorisation succeeded
@@ -450,6 +473,12 @@ class Condensed:
         self.solves = 0  # solves done, each instead of a factorisation
         self._spent = 0.0  # flops spent on them (estimated)
         self.iterations = 0  # Richardson iterations
+
+    def destroy(self) -> None:
+        """Destroy its factorisation and PETSc objects (collective); ``K`` is the caller's."""
+        for obj in (self.bulk, self.outer, self._J, self._y, self._gather, self._v_A):
+            if obj is not None:
+                obj.destroy()
 
     def _factorise(self, K: PETSc.Mat) -> bool:
         """Factorise ``K``; whether MUMPS succeeded."""
@@ -561,7 +590,8 @@ class Condensed:
             self._Z = [np.hstack(self._Z)]
         self._M = np.eye(n) + C @ self._G[np.ix_(where, self._cols)]
         if self._J is None:
-            self._J = PETSc.Mat().createPython(self._K.getSizes(), self, comm=self._K.getComm())
+            self._J = PETSc.Mat().createPython(self._K.getSizes(), _Callbacks(self),
+                                               comm=self._K.getComm())
             self._J.setUp()
         self.outer.setOperators(self._J, self._J)
         try:
@@ -618,3 +648,19 @@ class Condensed:
         values[self._local] -= w[self._owned]
         y.setArray(values)
         self.bulk.solve(y, z)
+
+
+class _Callbacks:
+    """The Python context of :class:`Condensed`'s operator and preconditioner, calling it
+    through a weak reference: PETSc keeps a context where Python's collector does not see
+    it, so a :class:`Condensed` that was its own context would never be collected (nor its
+    factorisation freed)."""
+
+    def __init__(self, owner: Condensed):
+        self._owner = weakref.ref(owner)
+
+    def mult(self, mat, v: PETSc.Vec, y: PETSc.Vec) -> None:
+        self._owner().mult(mat, v, y)
+
+    def apply(self, pc, r: PETSc.Vec, z: PETSc.Vec) -> None:
+        self._owner().apply(pc, r, z)

@@ -116,6 +116,12 @@ class Solver:
         """The linear solver of the Newton iterations (its counts: factorisations...)."""
         return self.newton.linear
 
+    def release(self) -> None:
+        """Free the PETSc memory the run leaves (collective): the factorisations, and the
+        objects dropped during it (:meth:`~dolfinx_friction.nls.newton.Newton.release`);
+        counts, timers and fields stay, and a next :meth:`run` factorises afresh."""
+        self.newton.release(self.system)
+
     # ------------------------------------------------------------ set-up
     def reaction_groups(self) -> list[str]:
         s = self.problem.scene

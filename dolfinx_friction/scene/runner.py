@@ -10,7 +10,9 @@ from typing import Callable, Optional, Sequence, Union
 
 from mpi4py import MPI
 
+from dolfinx_friction.io.gmsh import MeshSet
 from dolfinx_friction.nls.defaults import ITERATIVE, choose
+from dolfinx_friction.nls.linear import release_garbage
 from dolfinx_friction.scene.model import Scene
 from dolfinx_friction.io.writer import ResultWriter
 from dolfinx_friction.scene.build import ContactProblem
@@ -63,6 +65,16 @@ def linear_solver(problem: ContactProblem, petsc_options: Optional[dict],
                   settings.direct_max_dofs)
     options = {**(ITERATIVE if kind == "iterative" else {}), **dict(settings.petsc_options)}
     return options or None, reuse
+
+
+def _release(solver: Solver, workspace: Optional[Workspace]) -> None:
+    """The end of a run (collective): the solver's factorisations and the PETSc objects
+    dropped on the communicators of its meshes and of the meshes ``workspace`` keeps (those
+    of the run before, dropped since) are freed."""
+    solver.release()
+    if workspace is not None:
+        release_garbage(body.mesh.comm for meshes in workspace.values()
+                        if isinstance(meshes, MeshSet) for body in meshes.bodies.values())
 
 
 def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
@@ -169,8 +181,10 @@ def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
         solver.summary.wall = time.perf_counter() - start
         if writer is not None:
             writer.summary(solver.summary, extra())
+        _release(solver, workspace)
         raise
     summary.wall = time.perf_counter() - start
     if writer is not None:
         writer.summary(summary, extra())
+    _release(solver, workspace)
     return RunResult(problem, summary, increments, directory if write else None, solver)

@@ -39,6 +39,11 @@ class Workspace:
         """A run begins: what the last run used stays available, the rest is dropped."""
         self._kept, self._used = self._used, {}
 
+    def values(self) -> list:
+        """Every object it holds (those the last run used, then the older ones), in the
+        order they were made or reused."""
+        return [*self._used.values(), *self._kept.values()]
+
     def get(self, key: Hashable, make: Callable[[], T]) -> T:
         """The object of ``key``: the one kept for it, else ``make()``."""
         if key not in self._used:
