@@ -22,6 +22,7 @@ __all__ = [
     "KEYS",
     "LAWS",
     "MAX_AUGMENTATIONS",
+    "MAX_RELAXATION",
     "METHODS",
     "PENALTY_PER_SPACING",
     "STICK_SLOPE_PER_SPACING",
@@ -53,6 +54,10 @@ def default_distribution(quadratic: bool, rigid: bool, axisymmetric: bool) -> st
 #: Uzawa update divides the violation by about 1 + K / (the structure's stiffness at a
 #: node): 2-4 updates at the default K)
 MAX_AUGMENTATIONS = 25
+#: largest over-relaxation of an augmented Lagrangian update (Aitken's factor, 1 / (1 -
+#: rho) on a geometric series of ratio rho: 100 reaches rho = 0.99, a penalty of about 0.01
+#: times the structure's stiffness at a node)
+MAX_RELAXATION = 100.0
 
 #: Default penalty and stick slope in units of E/h (E: the slave body's Young's modulus,
 #: h: its node spacing, see :func:`defaults`), from the stability maps

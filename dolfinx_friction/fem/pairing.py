@@ -16,10 +16,11 @@ from mpi4py import MPI
 from petsc4py import PETSc
 from scipy.spatial import cKDTree
 
-from dolfinx_friction.contact.element import (OPEN, SLIP, ContactParameters, ElementResult,
+from dolfinx_friction.contact.element import (OPEN, SLIP, STICK, ContactParameters, ElementResult,
                                               Kinematics, evaluate, face_kinematics,
                                               rigid_kinematics, sdf_kinematics)
 from dolfinx_friction.contact.friction import FrictionState
+from dolfinx_friction.fem.contact_settings import MAX_RELAXATION
 from dolfinx_friction.contact.projection import clearances
 from dolfinx_friction.fem.mortar_distribution import MortarDistribution
 from dolfinx_friction.fem.obstacles import (Obstacle, SignedDistance, rotation_matrix,
@@ -203,6 +204,8 @@ class ContactInteraction:
         #: the reference of the elastic slip; zero for the penalty method
         self.multiplier_N = np.zeros(n)
         self.multiplier_T = np.zeros((n, gdim))
+        #: the last Uzawa step of this increment and its relaxation factor (:meth:`augment`)
+        self._last_step: Optional[tuple[np.ndarray, float]] = None
         self._first_pairing = True
         self.elements = Elements(*(np.zeros(0, int),) * 2, np.zeros((0, 2), int),
                                  *(np.zeros(0, int),) * 2)
@@ -527,6 +530,7 @@ class ContactInteraction:
     # ---------------------------------------------------------------- history
     def commit(self) -> None:
         """Make the trial history of the converged increment the new start state."""
+        self._last_step = None
         s = self.elements.slave
         self.in_contact[:] = False
         self.in_contact[s] = True
@@ -563,13 +567,48 @@ class ContactInteraction:
         multiplier as a length (the overclosure, the elastic slip of a sticking node)
         relative to the node's spacing."""
         N, T = self._uzawa()
-        change = np.maximum(np.abs(N - self.multiplier_N),
-                            np.linalg.norm(T - self.multiplier_T, axis=1))
+        change = np.abs(N - self.multiplier_N)
+        el, r = self.elements, self.elements.result
+        if r is not None and len(el.slave):
+            stick = el.slave[r.status == STICK]
+            change[stick] = np.maximum(change[stick], np.linalg.norm(
+                T[stick] - self.multiplier_T[stick], axis=1))
         return float(np.max(change / self.slaves.spacing, initial=0.0))
 
     def augment(self) -> None:
-        """Make the Uzawa update (:meth:`_uzawa`); the elements must be evaluated again."""
-        self.multiplier_N, self.multiplier_T = self._uzawa()
+        """Make the Uzawa update (:meth:`_uzawa`), over-relaxed by Aitken's factors from
+        this increment's last two steps (collective); the elements must be evaluated again.
+
+        Uzawa's iteration ``m <- m + r(m)`` converges like a geometric series of ratio
+        ``rho = 1 / (1 + K / k_s)`` (``k_s``: the structure's stiffness at a node) for the
+        overclosures, ``1 / (1 + lambda / k_s)`` for the elastic slips of sticking nodes:
+        slowly where the penalty or the stick slope is soft.  Aitken's factor ``omega =
+        -omega_last (r_last . (r - r_last)) / |r - r_last|^2`` (Irons and Tuck) is ``1 / (1 -
+        rho)`` on such a series, its sum in one step; one for each part, held to ``[1,
+        MAX_RELAXATION]``.  A slipping node's multiplier is its friction force, taken as it
+        is."""
+        N, T = self._uzawa()
+        step_N, step_T = N - self.multiplier_N, T - self.multiplier_T
+        el, r = self.elements, self.elements.result
+        stick = el.slave[r.status == STICK] if r is not None else np.zeros(0, int)
+        # (the factors from every node's step: from the sticking nodes' alone, whose set
+        # changes from update to update, the ironing needed 3 times the iterations)
+        steps = (step_N, step_T.ravel())
+        omega_N, omega_T = ((1.0, 1.0) if self._last_step is None
+                            else self._aitken(*self._last_step, steps))
+        self._last_step = (steps, (omega_N, omega_T))
+        if r is not None:
+            s = el.slave
+            N[s] = np.maximum(0.0, self.multiplier_N[s] + omega_N * step_N[s])
+            T[stick] = self.multiplier_T[stick] + omega_T * step_T[stick]
+        self.multiplier_N, self.multiplier_T = N, T
+
+    def _aitken(self, last: tuple, last_omegas: tuple, steps: tuple) -> tuple[float, float]:
+        """Aitken's factor for each part of the Uzawa step (:meth:`augment`; collective)."""
+        sums = self.comm.allreduce(np.array([(a @ (b - a), (b - a) @ (b - a))
+                                             for a, b in zip(last, steps)]))
+        return tuple(float(np.clip(-omega * dot / norm2, 1.0, MAX_RELAXATION))
+                     if norm2 > 0.0 else 1.0 for omega, (dot, norm2) in zip(last_omegas, sums))
 
     def save(self) -> tuple:
         return (self.history.copy(), self.in_contact.copy(), self.closed.copy(),
@@ -578,6 +617,7 @@ class ContactInteraction:
     def restore(self, saved: tuple) -> None:
         (self.history, self.in_contact, self.closed, self.multiplier_N,
          self.multiplier_T) = (a.copy() for a in saved)
+        self._last_step = None
 
     def contact_state(self) -> np.ndarray:
         """(n, 2): status and master face id of every slave node on this rank ((-1, -1)
