@@ -103,7 +103,8 @@ class Solver:
         self.system = problem.system
         self.timers = self.system.timers
         self.newton = Newton(prefix=options_prefix, petsc_options=petsc_options,
-                             reuse_factorisation=reuse_factorisation)
+                             reuse_factorisation=reuse_factorisation,
+                             chord=problem.scene.solver.chord)
         self.summary = RunSummary(timers=self.timers)
         self._bc_state: dict[str, tuple] = {}
         self._load_state: dict[str, tuple] = {}

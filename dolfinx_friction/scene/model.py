@@ -20,7 +20,7 @@ from dolfinx_friction.fem import contact_settings, obstacles
 from dolfinx_friction.fem.contact_settings import (  # noqa: F401  (re-exported)
     CALCULIX, LAWS, PENALTY_PER_SPACING, STICK_SLOPE_PER_SPACING, TANGENTS)
 from dolfinx_friction.fem.obstacles import SHAPES  # noqa: F401  (re-exported)
-from dolfinx_friction.nls.defaults import CONVERGENCE, LINEAR_KINDS, STALL_ITERATIONS
+from dolfinx_friction.nls.defaults import CHORD, CONVERGENCE, LINEAR_KINDS, STALL_ITERATIONS
 from dolfinx_friction.rules import Key, Rules, validate
 from dolfinx_friction.scene import validation as v
 
@@ -211,12 +211,15 @@ class SolverSettings:
     ``direct_max_dofs`` unknowns, default by dimension:
     :data:`~dolfinx_friction.nls.defaults.DIRECT_MAX_DOFS`); ``reuse_factorisation``
     (None: where it pays); ``petsc_options`` over the chosen solver's, as ``(name, value)``
-    pairs (a dict is taken)."""
+    pairs (a dict is taken); ``chord``: a finite-strain Newton step solves with the last
+    factorisation where the step before cut the residual to this share or less, whole and
+    without a contact change (0: never; :data:`~dolfinx_friction.nls.defaults.CHORD`)."""
 
     linear: str = "auto"
     direct_max_dofs: Optional[int] = None
     reuse_factorisation: Optional[bool] = None
     petsc_options: tuple[tuple[str, object], ...] = ()
+    chord: float = CHORD
 
     def __post_init__(self) -> None:
         validate(self, RULES[SolverSettings])
@@ -322,6 +325,7 @@ RULES: dict[type, Rules] = {
         "direct_max_dofs": Key(v.integer(0, 10**12)),
         "reuse_factorisation": Key(v.boolean),
         "petsc_options": Key(v.petsc_options),
+        "chord": Key(v.number(ge=0, lt=1)),
     }),
     Scene: Rules("", {
         "title": Key(v.string),

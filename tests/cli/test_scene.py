@@ -410,6 +410,7 @@ def test_solver_table(tmp_path):
         ("ksp_norm_type", "unpreconditioned"), ("ksp_rtol", 1e-8), ("pc_type", "hypre")))
     path = write(tmp_path, EXAMPLE)
     assert load_scene(path, ["solver.linear=direct"]).solver.linear == "direct"
+    assert load_scene(path, ["solver.chord=0"]).solver.chord == 0.0
 
 
 def test_parse_scene_without_source_keeps_paths():
@@ -740,6 +741,8 @@ BAD = [
      ["solver.kind", "unknown key"]),
     ("solver-negative-limit", "example", [put("solver", {"direct_max_dofs": -1})],
      ["solver.direct_max_dofs = -1"]),
+    ("solver-chord-not-below-one", "example", [put("solver", {"chord": 1})],
+     ["solver.chord = 1", "must be < 1"]),
     ("solver-options-not-a-table", "example", [put("solver", {"petsc_options": "-ksp_type cg"})],
      ["solver.petsc_options", "table of PETSc options"]),
     ("solver-option-with-dash", "example", [put("solver", {"petsc_options": {"-ksp_type": "cg"}})],
