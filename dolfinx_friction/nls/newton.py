@@ -174,22 +174,8 @@ class Newton:
             if may_stall and 0 < self.stall <= it - best_at:
                 trace.reason = f"no new lowest residual in {self.stall} iterations"
                 break
-            solver = self._solver(problem)
-            solved = None
-            if self._chord_step(problem, trace):
-                with problem.timers.measure("linear_solve"):
-                    solved = solver.solve_again(b, dx) or None
-            split = problem.split() if solver.reuse and solved is None else None
-            with problem.timers.measure("linear_solve"):
-                if split is not None:
-                    solved = solver.solve_split(split, b, dx)
-            if solved is None:  # no split, or it did not pay: the whole Jacobian
-                A = problem.jacobian(x, symmetric=solver.symmetric)
-                with problem.timers.measure("linear_solve"):
-                    solved = solver.solve(A, b, dx, forcing(norm, trace.residuals[0], target),
-                                          problem.constrained_rows,
-                                          problem.linear_interior())
-            if not solved:
+            krylov_rtol = forcing(norm, trace.residuals[0], target)
+            if not self._step(problem, trace, x, b, dx, krylov_rtol):
                 trace.backtracks.append(0)
                 trace.reason = self.linear.failure
                 break
@@ -205,6 +191,29 @@ class Newton:
         if trace.converged:
             problem.check_held()
         return trace
+
+    def _step(self, problem: BlockProblem, trace: NewtonTrace, x: PETSc.Vec, b: PETSc.Vec,
+              dx: PETSc.Vec, krylov_rtol: float) -> bool:
+        """Solve ``J dx = b`` at ``x`` the cheapest way that applies; whether it solved.  A
+        chord step with the last factorisation (:meth:`_chord_step`); else the Jacobian as
+        bulk plus contact with the bulk's factorisation kept, where the solver keeps one
+        and that pays (:meth:`LinearSolver.solve_split`); else the whole Jacobian,
+        assembled (a Krylov solver stops at ``krylov_rtol``)."""
+        solver = self._solver(problem)
+        if self._chord_step(problem, trace):
+            with problem.timers.measure("linear_solve"):
+                if solver.solve_again(b, dx):
+                    return True
+        split = problem.split() if solver.reuse else None
+        if split is not None:
+            with problem.timers.measure("linear_solve"):
+                solved = solver.solve_split(split, b, dx)
+            if solved is not None:
+                return solved
+        A = problem.jacobian(x, symmetric=solver.symmetric)
+        with problem.timers.measure("linear_solve"):
+            return solver.solve(A, b, dx, krylov_rtol, problem.constrained_rows,
+                                problem.linear_interior())
 
     def _chord_step(self, problem: BlockProblem, trace: NewtonTrace) -> bool:
         """Whether the next step solves with the last factorisation instead of a new
