@@ -20,8 +20,8 @@ from dolfinx_friction.contact.element import (OPEN, SLIP, STICK, ContactParamete
                                               Kinematics, evaluate, face_kinematics,
                                               rigid_kinematics, sdf_kinematics)
 from dolfinx_friction.contact.friction import FrictionState
-from dolfinx_friction.fem.contact_settings import MAX_RELAXATION
 from dolfinx_friction.contact.projection import clearances
+from dolfinx_friction.fem.contact_settings import MAX_RELAXATION
 from dolfinx_friction.fem.mortar_distribution import MortarDistribution
 from dolfinx_friction.fem.obstacles import (Obstacle, SignedDistance, rotation_matrix,
                                              rotation_size)
@@ -204,8 +204,10 @@ class ContactInteraction:
         #: the reference of the elastic slip; zero for the penalty method
         self.multiplier_N = np.zeros(n)
         self.multiplier_T = np.zeros((n, gdim))
-        #: the last Uzawa step of this increment and its relaxation factor (:meth:`augment`)
-        self._last_step: Optional[tuple[np.ndarray, float]] = None
+        #: this increment's last Uzawa step (normal, tangential) and its relaxation factors
+        #: (:meth:`augment`)
+        self._last_step: Optional[tuple[tuple[np.ndarray, np.ndarray],
+                                        tuple[float, float]]] = None
         self._first_pairing = True
         self.elements = Elements(*(np.zeros(0, int),) * 2, np.zeros((0, 2), int),
                                  *(np.zeros(0, int),) * 2)
