@@ -570,12 +570,15 @@ class ContactInteraction:
         relative to the node's spacing."""
         N, T = self._uzawa()
         change = np.abs(N - self.multiplier_N)
-        el, r = self.elements, self.elements.result
-        if r is not None and len(el.slave):
-            stick = el.slave[r.status == STICK]
-            change[stick] = np.maximum(change[stick], np.linalg.norm(
-                T[stick] - self.multiplier_T[stick], axis=1))
+        stick = self._sticking()
+        change[stick] = np.maximum(change[stick], np.linalg.norm(
+            T[stick] - self.multiplier_T[stick], axis=1))
         return float(np.max(change / self.slaves.spacing, initial=0.0))
+
+    def _sticking(self) -> np.ndarray:
+        """The slave nodes (indices) that stuck at the last evaluation."""
+        el, r = self.elements, self.elements.result
+        return el.slave[r.status == STICK] if r is not None else np.zeros(0, int)
 
     def augment(self) -> None:
         """Make the Uzawa update (:meth:`_uzawa`), over-relaxed by Aitken's factors from
@@ -591,18 +594,16 @@ class ContactInteraction:
         is."""
         N, T = self._uzawa()
         step_N, step_T = N - self.multiplier_N, T - self.multiplier_T
-        el, r = self.elements, self.elements.result
-        stick = el.slave[r.status == STICK] if r is not None else np.zeros(0, int)
+        stick = self._sticking()
         # (the factors from every node's step: from the sticking nodes' alone, whose set
         # changes from update to update, the ironing needed 3 times the iterations)
         steps = (step_N, step_T.ravel())
         omega_N, omega_T = ((1.0, 1.0) if self._last_step is None
                             else self._aitken(*self._last_step, steps))
         self._last_step = (steps, (omega_N, omega_T))
-        if r is not None:
-            s = el.slave
-            N[s] = np.maximum(0.0, self.multiplier_N[s] + omega_N * step_N[s])
-            T[stick] = self.multiplier_T[stick] + omega_T * step_T[stick]
+        s = self.elements.slave
+        N[s] = np.maximum(0.0, self.multiplier_N[s] + omega_N * step_N[s])
+        T[stick] = self.multiplier_T[stick] + omega_T * step_T[stick]
         self.multiplier_N, self.multiplier_T = N, T
 
     def _aitken(self, last: tuple, last_omegas: tuple, steps: tuple) -> tuple[float, float]:

@@ -69,12 +69,13 @@ def linear_solver(problem: ContactProblem, petsc_options: Optional[dict],
 
 def _release(solver: Solver, workspace: Optional[Workspace]) -> None:
     """The end of a run (collective): the solver's factorisations and the PETSc objects
-    dropped on the communicators of its meshes and of the meshes ``workspace`` keeps (those
-    of the run before, dropped since) are freed."""
+    dropped on the communicators of its meshes (:meth:`Solver.release`) and of the other
+    meshes ``workspace`` keeps (those of the run before, dropped since) are freed."""
     solver.release()
     if workspace is not None:
         release_garbage(body.mesh.comm for meshes in workspace.values()
-                        if isinstance(meshes, MeshSet) for body in meshes.bodies.values())
+                        if isinstance(meshes, MeshSet) and meshes is not solver.problem.meshes
+                        for body in meshes.bodies.values())
 
 
 def run(scene: Union[Scene, str, Path], out: Union[str, Path, None] = None,
