@@ -73,8 +73,8 @@ class BlockJacobian:
         self._linear_sum = sum(self.linear_data.values(), np.zeros(self.base.nnz))
         self.K_linear: Optional[PETSc.Mat] = None
         if homogeneous:
-            self.K_linear = self.base.create_matrix()
-            self.base.fill(self.K_linear, sum(self.linear_data[k] for k in homogeneous))
+            self.K_linear = self.base.blocks_matrix(
+                homogeneous, sum(self.linear_data[k] for k in homogeneous))
         self._pattern: Optional[CooPattern] = None
         self._versions: Optional[list[int]] = None
         self._J: Optional[PETSc.Mat] = None

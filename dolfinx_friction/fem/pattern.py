@@ -200,6 +200,20 @@ class CooPattern:
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
         return A
 
+    def blocks_matrix(self, blocks: list[int], data: np.ndarray) -> PETSc.Mat:
+        """An assembled matrix of only the given blocks' entries, valued from CSR ``data``
+        of this pattern (a product with it skips the other blocks' slots: the linear
+        bodies' ``K u`` beside a nonlinear body; collective)."""
+        slots = np.unique(np.concatenate([self._blocks[k].slots for k in blocks]
+                                         + [np.zeros(0, np.int64)]))
+        counts = np.bincount(self._row_of_slot[slots], minlength=self.n_owned)
+        indptr = np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType)
+        csr = (indptr, self.indices[slots], np.asarray(data[slots], dtype=PETSc.ScalarType))
+        size = ((self.n_owned, self.n_global), (self.n_owned, self.n_global))
+        A = PETSc.Mat().createAIJ(size, csr=csr, comm=self.comm)
+        A.assemble()
+        return A
+
     def fill(self, A: PETSc.Mat, data: np.ndarray) -> None:
         """Overwrite all values of ``A`` (created by :meth:`create_matrix`) with CSR ``data``."""
         values = A.getAttr(_VALUES)
