@@ -2,6 +2,7 @@
 
     python benchmarks/bench_mortar.py            # ~5 min, writes its RESULTS.md section
     python benchmarks/bench_mortar.py --no-results
+    python benchmarks/bench_mortar.py --patch-figure   # only the patch tests' chart (~1 min)
 
 Each scene runs with ``[[contact]] distribution = "nodal"`` (plain node-to-surface) and
 ``"mortar"`` (docs/theory.md §2.4), serial, MUMPS:
@@ -17,6 +18,9 @@ Each scene runs with ``[[contact]] distribution = "nodal"`` (plain node-to-surfa
 * ``demos/ironing.toml``: a stiff die dragged over a soft block (mu = 0.3, 4 + 64
   increments; the block is the slave): the die's reaction along the drag.
 
+Chart: the slave nodal pressures of the patch tests against their position across the
+interface, nodal against mortar (``benchmarks/figures/patch_test.png``).
+
 Reported: CPU seconds of the run, Newton iterations, contact CPU per iteration (search and
 pairing + evaluation and assembly, the solver's own timers), the bulk assembly's CPU per
 iteration and the matrix patterns made (``couplings_version``), the CPU of the mortar
@@ -28,6 +32,7 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
+from typing import Optional
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _bench as B  # noqa: E402  (before numpy: its settings)
@@ -76,7 +81,9 @@ def _row(label: str, distribution: str, n: dict, contact: float, clock, extra: l
             *extra]
 
 
-def patch(rows: list) -> None:
+def patch(rows: list, pressures: Optional[dict] = None) -> None:
+    """The patch tests' rows; ``pressures``: also each run's slave node positions along x
+    and pressures by (label, distribution)."""
     from dolfinx_friction.reference import meshes
     from dolfinx_friction.reference.compare import contact_state
     from dolfinx_friction.scene.model import BC, Body, ContactPair, Load, Output, Scene, Step
@@ -98,8 +105,11 @@ def patch(rows: list) -> None:
                                       loads=(Load("upper_top", pressure=1.0),)),),
                           output=Output(fields=False, contact_table=False))
             result, n, contact, clock = _numbers(scene)
-            p = contact_state(result)["pressure"]
+            state = contact_state(result)
+            p = state["pressure"]
             label = f"patch {dim}D P{degree}, {cells[0]} / {cells[1]} cells"
+            if pressures is not None:
+                pressures[label, distribution] = (state["X"][:, 0], p)
             rows.append(_row(label, distribution, n, contact, clock,
                              [f"pressures {p.min():.6f} - {p.max():.6f}"]))
             print(rows[-1], flush=True)
@@ -167,14 +177,38 @@ def ironing(rows: list) -> dict:
     return drag
 
 
+def patch_figure(pressures: dict, machine: dict) -> Path:
+    """One panel per patch test: the slave nodal pressures against x, nodal and mortar."""
+    plt = B.pyplot()
+    labels = list(dict.fromkeys(label for label, _ in pressures))
+    fig, axes = plt.subplots(1, len(labels), figsize=(4.0 * len(labels), 3.4), sharey=True)
+    for ax, label in zip(axes, labels):
+        for distribution, marker in (("nodal", "o"), ("mortar", "s")):
+            x, p = pressures[label, distribution]
+            ax.plot(x, p, marker, ms=3, alpha=0.7, label=distribution)
+        ax.axhline(1.0, color="k", lw=0.8, ls="--", label="exact")
+        ax.set_title(label.replace("patch ", ""), fontsize=9)
+        ax.set_xlabel("x of the slave node")
+    axes[0].set_ylabel("nodal pressure F_N / A")
+    axes[0].legend(fontsize=8)
+    return B.save_figure(fig, "patch_test.png", "Contact patch test: pressure 1 across "
+                         "non-matching meshes (slave = the finer upper block)", machine)
+
+
 def main() -> None:
     parser = B.argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--no-results", action="store_true")
+    parser.add_argument("--patch-figure", action="store_true",
+                        help="only the patch tests' chart (no timings, RESULTS.md untouched)")
     args = parser.parse_args()
     m = B.machine()
     patch([])  # warm-up: numba kernels, forms (not timed)
     rows: list = []
-    patch(rows)
+    pressures: dict = {}
+    patch(rows, pressures)
+    print("chart:", patch_figure(pressures, m))
+    if args.patch_figure:
+        return
     hertz(rows)
     sliding(rows)
     drag = ironing(rows)
