@@ -27,6 +27,12 @@ def ownership_ends(comm: MPI.Comm, n_owned: int) -> np.ndarray:
     return np.cumsum(comm.allgather(n_owned)).astype(np.int64)
 
 
+def _row_pointers(rows: np.ndarray, n_rows: int) -> np.ndarray:
+    """CSR row pointers (n_rows + 1,) of entries in the given local rows (in CSR order)."""
+    return np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n_rows))]).astype(
+        PETSc.IntType)
+
+
 def csr_values(A: PETSc.Mat) -> np.ndarray:
     """The CSR values of a serial matrix: the array PETSc stores them in where
     :meth:`CooPattern.create_matrix` made it (no copy; not to be written), else a copy."""
@@ -100,8 +106,7 @@ class CooPattern:
         self._keys = unique
         self.nnz = len(unique)
         self._row_of_slot = unique // self.n_global
-        counts = np.bincount(self._row_of_slot, minlength=self.n_owned)
-        self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType)
+        self.indptr = _row_pointers(self._row_of_slot, self.n_owned)
         self.indices = (unique % self.n_global).astype(PETSc.IntType)
 
     def extended(self, blocks: list[tuple[np.ndarray, np.ndarray]]) -> "CooPattern":
@@ -140,8 +145,7 @@ class CooPattern:
         new._row_of_slot = np.insert(self._row_of_slot, where, rows)
         new.indices = np.insert(self.indices, where,
                                 (added % self.n_global).astype(PETSc.IntType))
-        new.indptr = self.indptr + np.concatenate(
-            [[0], np.cumsum(np.bincount(rows, minlength=self.n_owned))]).astype(PETSc.IntType)
+        new.indptr = self.indptr + _row_pointers(rows, self.n_owned)
         return new
 
     def gather_values(self, block: int, values: np.ndarray) -> np.ndarray:
@@ -188,7 +192,7 @@ class CooPattern:
     def create_matrix(self, block_size: int = 1) -> PETSc.Mat:
         """A matrix of this pattern, zero.  In serial PETSc stores its values in an array
         of ours (:meth:`fill` writes them in place); under MPI it copies them."""
-        size = ((self.n_owned, self.n_global), (self.n_owned, self.n_global))
+        size = self._sizes()
         if self.comm.size == 1:
             csr = (self.indptr, self.indices, np.zeros(self.nnz, dtype=PETSc.ScalarType))
             A = PETSc.Mat().createAIJWithArrays(size, csr, comm=self.comm)
@@ -200,17 +204,19 @@ class CooPattern:
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
         return A
 
+    def _sizes(self) -> tuple:
+        """PETSc's (local, global) sizes of rows and columns of this pattern's matrices."""
+        return (self.n_owned, self.n_global), (self.n_owned, self.n_global)
+
     def blocks_matrix(self, blocks: list[int], data: np.ndarray) -> PETSc.Mat:
         """An assembled matrix of only the given blocks' entries, valued from CSR ``data``
         of this pattern (a product with it skips the other blocks' slots: the linear
         bodies' ``K u`` beside a nonlinear body; collective)."""
         slots = np.unique(np.concatenate([self._blocks[k].slots for k in blocks]
                                          + [np.zeros(0, np.int64)]))
-        counts = np.bincount(self._row_of_slot[slots], minlength=self.n_owned)
-        indptr = np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType)
-        csr = (indptr, self.indices[slots], np.asarray(data[slots], dtype=PETSc.ScalarType))
-        size = ((self.n_owned, self.n_global), (self.n_owned, self.n_global))
-        A = PETSc.Mat().createAIJ(size, csr=csr, comm=self.comm)
+        csr = (_row_pointers(self._row_of_slot[slots], self.n_owned), self.indices[slots],
+               np.asarray(data[slots], dtype=PETSc.ScalarType))
+        A = PETSc.Mat().createAIJ(self._sizes(), csr=csr, comm=self.comm)
         A.assemble()
         return A
 
