@@ -28,12 +28,13 @@ it is active), ``x = K^-1 (b - P_A w)``, ``(I + C_AA G) w = C_AA (K^-1 b)_A`` (W
 identity), as the preconditioner of Richardson iterations on ``J`` (applied as
 ``K v + C v``, never assembled) until the true residual is below 1e-10 ``|b|`` (one
 iteration on the Hertz benchmark; reactions as with LU to 1e-12).  It is used while its
-flops so far (columns of ``G``, back-solves, dense solves; MUMPS's counts) stay below
-those of the solves it replaced plus :data:`INVESTMENT` of them, else the path above is
-taken.  What a solve by that path costs is its flops per solve so far (factorisations,
-and back-solves with a kept one: a block of 16k dofs whose kept factorisation needs 13
-GMRES iterations per Jacobian costs a third of a factorisation per solve, and 1,000
-columns of ``G`` would not pay back there), known once that path solved (with a
+flops so far (columns of ``G``, back-solves, dense solves; MUMPS's counts, a column of
+``G`` at :data:`COLUMN_SHARE` of a back-solve's) stay below those of the solves it
+replaced plus :data:`INVESTMENT` of them, else the path above is taken.  What a solve by
+that path costs is its flops per solve so far (factorisations, and back-solves with a kept
+one: a block of 16k dofs whose kept factorisation needs 13 GMRES iterations per Jacobian
+costs a third of a factorisation per solve, and 1,000 columns of ``G`` would not pay back
+there), known once that path solved (with a
 factorisation it keeps: once that preconditioned a solve); ``K`` is factorised only if
 ``G``'s columns, at that path's back-solve flops, could pay (on a 35k-dof 3D block they
 cannot: 0.67 s of factorisation was spent for nothing).
@@ -420,6 +421,12 @@ def _costs(F: PETSc.Mat, symmetric: bool) -> tuple[float, float]:
 INVESTMENT = 4
 #: Columns of ``K^-1`` computed per back-solve call (dense right-hand sides).
 COLUMNS_PER_SOLVE = 64
+#: A column of ``G`` is priced at this share of a back-solve's flops: computed among
+#: :data:`COLUMNS_PER_SOLVE` right-hand sides at once (BLAS 3), it runs faster per flop
+#: than the factorisation every cost here is weighed against; at that factorisation's
+#: rate it costs 0.12-0.81 of a back-solve (benchmarks/bench_columns.py: MUMPS, elastic
+#: stiffness of 220 to 14k rows, the smaller the cheaper).
+COLUMN_SHARE = 0.5
 
 
 class Condensed:
@@ -558,7 +565,7 @@ class Condensed:
         def cost(columns: int, per_column: float) -> float:
             """Flops of this solve on all ranks: new columns of G, back-solves, the dense
             solves (on every rank)."""
-            return ((columns + 8) * per_column
+            return ((COLUMN_SHARE * columns + 8) * per_column
                     + self.comm.size * 2.0 / 3.0 * len(active) ** 3)
 
         budget = replaced * (self.solves + 1 + INVESTMENT) - self._spent
