@@ -48,9 +48,14 @@ FIGURES = BENCH / "figures"
 RESULTS = BENCH / "RESULTS.md"
 DEMOS = ROOT / "demos"
 WORK = Path(os.environ.get("BENCH_WORK", "/tmp/dolfinx_friction_bench"))
-for _p in (str(ROOT), str(DEMOS)):
+# this checkout's package and demos, after the trees PYTHONPATH names (a before/after
+# comparison runs these scripts on an exported commit's package: ``export``)
+_GIVEN = {os.path.abspath(p) for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p}
+_AT = 1 + max((i for i, p in enumerate(sys.path) if p and os.path.abspath(p) in _GIVEN),
+              default=-1)
+for _p in (str(DEMOS), str(ROOT)):
     if _p not in sys.path:
-        sys.path.insert(0, _p)
+        sys.path.insert(_AT, _p)
 
 from dolfinx_friction.cli import environment  # noqa: E402  (imports no numpy)
 
