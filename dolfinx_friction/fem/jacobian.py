@@ -4,10 +4,14 @@ and the caches that make filling it again cheap.
 The bodies' Jacobians are joined in one COO pattern (:class:`~dolfinx_friction.fem.pattern.
 CooPattern`) in the block numbering; each new pattern of the contact couplings
 (``couplings_version``) extends it to a new matrix, which carries the block size and the
-bodies' rigid-body modes as near null space (for algebraic multigrid).  Filling the matrix at an iterate writes the bulk
-values (assembled once for linear bodies), the constrained rows (and, for a symmetric
-solve, columns) as identity, and the contacts' tangents over it; every cache is kept while
-the very objects it was made from (pattern, values, constrained rows) are the same.
+bodies' rigid-body modes as near null space (for algebraic multigrid).  Filling the matrix
+at an iterate writes the static values (the linear bodies' stiffness, assembled once, with
+the constrained rows, and for a symmetric solve columns, made identity), the nonlinear
+bodies' values (assembled at the iterate) at their slots but in the constrained rows, and
+adds the contacts' tangents: in serial in one pass over the matrix's own array; with only
+linear bodies, only the contacts' slots while the matrix holds the static values of the
+last fill.  Every cache is kept while the very objects it was made from (pattern, values,
+constrained rows) are the same.
 :meth:`BlockJacobian.split` gives the Jacobian as a constant bulk matrix plus the contact
 entries instead (:class:`JacobianSplit`, for the condensed solve).
 """
@@ -21,8 +25,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from dolfinx_friction import _compat as compat
-from dolfinx_friction.fem.pattern import CooPattern
+from dolfinx_friction.fem.pattern import CooPattern, held_values
 
 if TYPE_CHECKING:
     from dolfinx_friction.fem.block_problem import BlockProblem
@@ -79,11 +82,13 @@ class BlockJacobian:
         self._versions: Optional[list[int]] = None
         self._J: Optional[PETSc.Mat] = None
         self._abs: Optional[PETSc.Mat] = None  # |J_bulk|, for the round-off floor
-        self._abs_data: Optional[np.ndarray] = None
-        self._bulk_data: Optional[np.ndarray] = None  # bulk Jacobian values (last, or constant)
+        self._assemblies = 0  # of the nonlinear bodies' Jacobians since the construction
+        self._abs_assembly = 0  # the one |J_bulk| holds
+        self._bulk_data: Optional[np.ndarray] = None  # bulk values, all bodies linear
         self._zeroed: Optional[tuple] = None  # (key, slots of the constrained rows, columns)
         self._sources: Optional[tuple] = None  # (key, where the static values come from)
         self._static: Optional[tuple] = None  # (key, free obstacle rows, Jacobian without contact)
+        self._targets: Optional[tuple] = None  # (key, where the nonlinear bodies' values go)
         self._coupling_slots: Optional[tuple] = None  # (key, slots, zeroed, contacts' positions)
         self._bulk_bc: Optional[tuple] = None  # (constrained rows, bulk matrix with them)
         self._surface_dofs: Optional[np.ndarray] = None  # of all contacts and ranks (fixed)
@@ -98,34 +103,40 @@ class BlockJacobian:
         d = p.gdim
         blocks, values = [], []
         for k, body in enumerate(p.bodies):
-            body.A.zeroEntries()  # (the body's forms may come from an earlier problem)
-            compat.assemble_matrix_into(body.A, body.J)
-            indptr, cols, data = body.A.getValuesCSR()
-            values.append(data)
-            rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
-            cols = cols.astype(np.int64)
+            body.assemble_jacobian()  # (the body's forms may come from an earlier problem)
+            rows, cols = body.jacobian_entries()
+            values.append(body.jacobian_values())
             blocks.append((p.layout.nodes(k)[rows // d] * d + rows % d,
                            p.layout.from_block_global(k, cols // d) * d + cols % d))
         return CooPattern(p.comm, p.layout.n_owned * d, blocks), values
 
     def scale_of_bulk(self, x: PETSc.Vec, scale: PETSc.Vec) -> None:
         """``|J_bulk| |x| + |f_ext|`` into the round-off scale (contacts add theirs); a
-        nonlinear body's ``J`` is the one of the last :meth:`jacobian`."""
-        if self._abs is None or self._abs_data is not self._bulk_data:
-            if self._bulk_data is None:
-                self._bulk_data = self.bulk_values()
+        nonlinear body's ``J`` is the one of the last :meth:`jacobian` (before the first,
+        at its current ``u``)."""
+        if self._abs is None or self._abs_assembly != self._assemblies:
+            if not self._assemblies:
+                self._assemble_nonlinear()
             if self._abs is None:
                 self._abs = self.base.create_matrix()
-            self.base.fill(self._abs, np.abs(self._bulk_data))
-            self._abs_data = self._bulk_data
+            self.base.fill(self._abs, np.abs(self.bulk_values()))
+            self._abs_assembly = self._assemblies
         ax = x.copy()
         ax.abs()
         self._abs.mult(ax, scale)
         ax.destroy()
         scale.setArray(scale.getArray() + np.abs(self.problem.f_ext))
 
+    def _assemble_nonlinear(self) -> None:
+        """The nonlinear bodies' Jacobians at their current ``u``."""
+        for body in self.problem.bodies:
+            if not body.linear:
+                body.assemble_jacobian()
+        self._assemblies += 1
+
     def bulk_values(self) -> np.ndarray:
-        """Values of the bodies' Jacobians at their current ``u``, in the bulk pattern."""
+        """Values (bulk nnz,) of the bodies' Jacobians in the bulk pattern, a nonlinear
+        body's as last assembled."""
         base = self._linear_sum.copy()  # zero in the other bodies' rows
         for k, body in enumerate(self.problem.bodies):
             if not body.linear:
@@ -158,22 +169,59 @@ class BlockJacobian:
         p = self.problem
         with p.timers.measure("bulk_assembly"):
             A = self.matrix() if A is None else A
-            if not p.linear:
+            held = held_values(A)
+            if p.linear:
+                if self._bulk_data is None:
+                    self._bulk_data = self.bulk_values()
+                base, targets = self._bulk_data, None
+            else:
                 p.scatter(x)
-            if self._bulk_data is None or not p.linear:
-                self._bulk_data = self.bulk_values()
-            base = self._bulk_data
+                self._assemble_nonlinear()
+                targets = None if held is None else self._nonlinear_targets(symmetric)
+                base = self.bulk_values() if targets is None else self._linear_sum
         with p.timers.measure("contact_assembly"):
             static = self._static_values(base, symmetric)
-            slots, values = self._contact_values(static, symmetric)
-            self._pattern.fill_over(A, static, slots, values)
+            slots, contact = self._contact_values(symmetric)
+            if targets is None:
+                self._pattern.fill_over(A, static, slots, static[slots] + contact)
+                return A
+            held[:] = static  # one pass over the matrix's own values
+            for k, kept, at in targets:
+                held[at] = p.bodies[k].jacobian_values()[kept]
+            held[slots] += contact
+            A.assemble()  # also tells PETSc the values changed (a factorisation is redone)
         return A
+
+    def _nonlinear_targets(self, symmetric: bool) -> Optional[list[tuple]]:
+        """For each nonlinear body ``k``, ``(k, kept, slots)``: the positions in its
+        ``jacobian_values`` of the entries outside :meth:`_zeroed_slots` and their slots
+        in :meth:`matrix`'s pattern; None where a body's values must be summed (under
+        MPI).  Kept with the pattern and the constrained rows."""
+        p = self.problem
+        rows = p.constrained_rows
+        key = (self._pattern, rows, symmetric)
+        cached = self._targets
+        if cached is None or not _same(cached[0], key):
+            nonlinear = [k for k, body in enumerate(p.bodies) if not body.linear]
+            own = [self.base.distinct_slots(k) for k in nonlinear]
+            targets = None
+            if all(slots is not None for slots in own):
+                zeroed = np.zeros(self._pattern.nnz, bool)
+                zeroed[self._zeroed_slots(rows, symmetric)] = True
+                targets = []
+                for k, slots in zip(nonlinear, own):
+                    at = self._pattern.base_slots[slots]
+                    kept = np.flatnonzero(~zeroed[at])
+                    targets.append((k, kept, at[kept]))
+            self._targets = cached = (key, targets)
+        return cached[1]
 
     def _static_values(self, base: np.ndarray, symmetric: bool) -> np.ndarray:
         """CSR data (pattern of :meth:`matrix`) of the Jacobian without contact: the bulk
-        ``base``, the constrained rows (``symmetric``: and columns) zero but for a unit
-        diagonal, the obstacles' springs.  Kept while pattern, ``base`` and rows are the
-        same objects and the free obstacle rows the same (linear bodies: once per search)."""
+        ``base`` (in one pass: the linear bodies' only), the constrained rows
+        (``symmetric``: and columns) zero but for a unit diagonal, the obstacles' springs.
+        Kept while pattern, ``base`` and rows are the same objects and the free obstacle
+        rows the same (with a one-pass fill or only linear bodies: once per search)."""
         p = self.problem
         rows, free = p.constrained_rows, p.free_obstacle_rows()
         key = (self._pattern, base, rows, symmetric)
@@ -184,7 +232,7 @@ class BlockJacobian:
         # A force-controlled obstacle may have no stiffness along some axis (a
         # frictionless plane in its own plane): a tiny spring in the Jacobian only keeps
         # it regular; the residual, hence the solution, is unchanged.
-        data[self._pattern.diagonal_slots[free]] += self._rigid_spring(base)
+        data[self._pattern.diagonal_slots[free]] += self._rigid_spring()
         self._static = (key, free, data)
         return data
 
@@ -214,11 +262,10 @@ class BlockJacobian:
             self._zeroed = cached = (key, self._pattern.row_slots(rows, columns))
         return cached[1]
 
-    def _contact_values(self, static: np.ndarray, symmetric: bool
-                        ) -> tuple[np.ndarray, np.ndarray]:
-        """The slots of the contacts' couplings (kept with the pattern) and the Jacobian's
-        values there: ``static`` plus the contacts' tangents, but in the constrained rows
-        (``symmetric``: and columns)."""
+    def _contact_values(self, symmetric: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The slots (sorted) of the contacts' couplings (kept with the pattern) and the
+        contacts' tangents there, zero in the constrained rows (``symmetric``: and
+        columns)."""
         p = self.problem
         rows = p.constrained_rows
         gathered = [self._pattern.gather_slots(k, c.coupling_values())
@@ -236,7 +283,7 @@ class BlockJacobian:
         for at, (_, sums) in zip(positions, gathered):
             contact[at] += sums
         contact[zeroed] = 0.0
-        return slots, static[slots] + contact
+        return slots, contact
 
     def constrained_dofs(self) -> np.ndarray:
         """Sorted global dofs of the constrained rows of every rank (collective; kept while
@@ -265,8 +312,7 @@ class BlockJacobian:
             if self._bulk_bc is None or self._bulk_bc[0] is not rows:
                 if self._bulk_bc is not None:
                     self._bulk_bc[1].destroy()
-                data = (self.bulk_values() if self._bulk_data is None
-                        else self._bulk_data.copy())
+                data = self.bulk_values()
                 data[self.base.row_slots(rows)] = 0.0
                 data[self.base.diagonal_slots[rows]] = 1.0
                 K = self.base.create_matrix(p.gdim)
@@ -287,11 +333,11 @@ class BlockJacobian:
         return JacobianSplit(self._bulk_bc[1], self._surface_dofs, r[keep], k[keep], v[keep],
                              p.bodies_symmetric())
 
-    def _rigid_spring(self, base: np.ndarray) -> float:
+    def _rigid_spring(self) -> float:
         """1e-12 of the largest bulk diagonal entry (found once)."""
         p = self.problem
         if not self._spring and p.n_obstacles:
-            diagonal = np.abs(base[self.base.diagonal_slots])
+            diagonal = np.abs(self.bulk_values()[self.base.diagonal_slots])
             self._spring = 1e-12 * p.comm.allreduce(float(diagonal.max(initial=0.0)),
                                                        op=MPI.MAX)
         return self._spring

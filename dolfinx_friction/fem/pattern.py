@@ -33,10 +33,17 @@ def _row_pointers(rows: np.ndarray, n_rows: int) -> np.ndarray:
         PETSc.IntType)
 
 
+def held_values(A: PETSc.Mat) -> np.ndarray | None:
+    """The array (nnz,) PETSc stores a matrix's CSR values in where
+    :meth:`CooPattern.create_matrix` made it in serial (writing it changes the matrix:
+    assemble after), else None."""
+    return A.getAttr(_VALUES)
+
+
 def csr_values(A: PETSc.Mat) -> np.ndarray:
-    """The CSR values of a serial matrix: the array PETSc stores them in where
-    :meth:`CooPattern.create_matrix` made it (no copy; not to be written), else a copy."""
-    values = A.getAttr(_VALUES)
+    """The CSR values of a serial matrix: :func:`held_values` where it has them (no copy;
+    not to be written), else a copy."""
+    values = held_values(A)
     return A.getValuesCSR()[2] if values is None else values
 
 
@@ -154,16 +161,23 @@ class CooPattern:
         received = b.exchange(self.comm, np.asarray(values, dtype=float).ravel(), np.float64)
         return np.bincount(b.slots, weights=received, minlength=self.nnz)
 
-    def put_values(self, block: int, values: np.ndarray, out: np.ndarray) -> None:
-        """Add one block's values (given in its constructor order) into CSR data ``out``
-        that is zero wherever the block has entries: in serial, where no two of its
-        entries share a slot, they are written there (no exchange, no sum), else
-        :meth:`gather_values` is added."""
+    def distinct_slots(self, block: int) -> np.ndarray | None:
+        """The slots (the block's size,) of one block's entries in its constructor order,
+        where writing its values there gives :meth:`gather_values`: in serial, if no two
+        of its entries share a slot; else None."""
         b = self._blocks[block]
         if b.distinct is None:
             b.distinct = self.comm.size == 1 and len(np.unique(b.slots)) == len(b.slots)
-        if b.distinct:
-            out[b.slots] = values
+        return b.slots if b.distinct else None
+
+    def put_values(self, block: int, values: np.ndarray, out: np.ndarray) -> None:
+        """Add one block's values (given in its constructor order) into CSR data ``out``
+        that is zero wherever the block has entries: written at its
+        :meth:`distinct_slots` where it has them (no exchange, no sum), else
+        :meth:`gather_values` is added."""
+        slots = self.distinct_slots(block)
+        if slots is not None:
+            out[slots] = values
         else:
             out += self.gather_values(block, values)
 
@@ -222,7 +236,7 @@ class CooPattern:
 
     def fill(self, A: PETSc.Mat, data: np.ndarray) -> None:
         """Overwrite all values of ``A`` (created by :meth:`create_matrix`) with CSR ``data``."""
-        values = A.getAttr(_VALUES)
+        values = held_values(A)
         if values is None:
             A.setValuesCSR(self.indptr, self.indices, data)
         else:
@@ -238,7 +252,7 @@ class CooPattern:
         last = A.getAttr(_BASE)
         kept = (last is not None and last[0] is base and last[1] is slots
                 and last[2] == A.stateGet())
-        held = A.getAttr(_VALUES)
+        held = held_values(A)
         if held is not None:
             if not kept:
                 held[:] = base

@@ -163,17 +163,18 @@ class Interior:
                 self._B.destroy()
             self._B = PETSc.Mat().createAIJWithArrays((m, m), csr, comm=PETSc.COMM_SELF)
             self._csr, self._values = csr, csr[2]
-            self._values[np.searchsorted(keys, D_keys)] = -self.D.ravel()
-            # J's entries go to ``to``, -D added where they meet it; -D alone stays as written
-            on_J = self._values[to]
-            at = np.flatnonzero(on_J)
-            self._from, self._J_PP, self._minus_D = (to, slots), np.empty(len(to)), (at, on_J[at])
+            # each slot of B takes J's value (D's alone: any, then overwritten with -D), and
+            # -D is added where it meets J's and is not zero
+            self._sources = np.zeros(len(keys), np.int64)
+            self._sources[to] = slots
+            at, minus_D = np.searchsorted(keys, D_keys), -self.D.ravel()
+            met = ~new & (minus_D != 0.0)
+            self._minus_D = (at[new], minus_D[new]), (at[met], minus_D[met])
             self._pattern = key
-        to, slots = self._from
-        at, minus_D = self._minus_D
-        np.take(csr_values(J), slots, out=self._J_PP)
-        self._J_PP[at] += minus_D
-        self._values[to] = self._J_PP
+        (alone, minus_alone), (met, minus_met) = self._minus_D
+        np.take(csr_values(J), self._sources, out=self._values)
+        self._values[alone] = minus_alone
+        self._values[met] += minus_met
         self._B.assemble()  # the values changed (a factorisation is redone)
         return self._B
 

@@ -61,6 +61,29 @@ def test_coo_pattern_sums_blocks_like_a_dense_matrix(comm, extended):
     assert np.abs(_csr_rows(A, N) - dense[start:end]).max() < 1e-13
 
 
+def test_body_jacobian_values_sit_at_their_entries(comm):
+    """A nonlinear body's Jacobian values (in serial copied from PETSc's block-AIJ array, in
+    its order) at its entries make the matrix ``getValuesCSR`` reads."""
+    import dolfinx.mesh
+    import ufl
+    from dolfinx_friction import _compat as compat
+    from dolfinx_friction.fem.body_forms import BodyForms
+    V = compat.vector_space(dolfinx.mesh.create_unit_square(comm, 4, 3), 1)
+    u = compat.function(V)
+    u.interpolate(lambda x: np.vstack([0.1 * x[0] * x[1], 0.05 * x[0] ** 2]))
+    F = ufl.Identity(2) + ufl.grad(u)
+    E = (F.T * F - ufl.Identity(2)) / 2
+    body = BodyForms(ufl.derivative((ufl.tr(E) ** 2 + ufl.inner(E, E)) * ufl.dx, u,
+                                    ufl.TestFunction(V)), u, None, [])
+    assert not body.linear
+    body.assemble_jacobian()
+    rows, cols = body.jacobian_entries()
+    N = body.A.getSize()[1]
+    dense = np.zeros((body.A.getLocalSize()[0], N))
+    np.add.at(dense, (rows, cols), body.jacobian_values())
+    assert np.array_equal(dense, _csr_rows(body.A, N))
+
+
 def test_fill_over_writes_a_block_over_a_kept_base(comm):
     """``fill_over``: the base with one block's sums at their slots (``gather_slots``), fill
     after fill with new block values; also after the matrix was changed in between (scaled:
