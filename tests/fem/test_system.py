@@ -77,11 +77,15 @@ def test_body_jacobian_values_sit_at_their_entries(comm):
                                     ufl.TestFunction(V)), u, None, [])
     assert not body.linear
     body.assemble_jacobian()
-    rows, cols = body.jacobian_entries()
+    rows, cols = body.jacobian_entries()  # (the storage order is checked on these values)
     N = body.A.getSize()[1]
-    dense = np.zeros((body.A.getLocalSize()[0], N))
-    np.add.at(dense, (rows, cols), body.jacobian_values())
-    assert np.array_equal(dense, _csr_rows(body.A, N))
+    for shift in (0.0, 0.2):  # and read again at another u, as Newton does
+        u.interpolate(lambda x: np.vstack([0.1 * x[0] * x[1] + shift * x[1] ** 2,
+                                           0.05 * x[0] ** 2 - shift * x[0] * x[1]]))
+        body.assemble_jacobian()
+        dense = np.zeros((body.A.getLocalSize()[0], N))
+        np.add.at(dense, (rows, cols), body.jacobian_values())
+        assert np.array_equal(dense, _csr_rows(body.A, N))
 
 
 def test_fill_over_writes_a_block_over_a_kept_base(comm):
