@@ -169,7 +169,6 @@ class BlockJacobian:
         p = self.problem
         with p.timers.measure("bulk_assembly"):
             A = self.matrix() if A is None else A
-            held = held_values(A)
             if p.linear:
                 if self._bulk_data is None:
                     self._bulk_data = self.bulk_values()
@@ -177,7 +176,8 @@ class BlockJacobian:
             else:
                 p.scatter(x)
                 self._assemble_nonlinear()
-                targets = None if held is None else self._nonlinear_targets(symmetric)
+                targets = (self._nonlinear_targets(symmetric)
+                           if held_values(A) is not None else None)
                 base = self.bulk_values() if targets is None else self._linear_sum
         with p.timers.measure("contact_assembly"):
             static = self._static_values(base, symmetric)
@@ -185,11 +185,9 @@ class BlockJacobian:
             if targets is None:
                 self._pattern.fill_over(A, static, slots, static[slots] + contact)
                 return A
-            held[:] = static  # one pass over the matrix's own values
-            for k, kept, at in targets:
-                held[at] = p.bodies[k].jacobian_values()[kept]
-            held[slots] += contact
-            A.assemble()  # also tells PETSc the values changed (a factorisation is redone)
+            self._pattern.fill_layered(
+                A, static, [(at, p.bodies[k].jacobian_values()[kept]) for k, kept, at in targets],
+                slots, contact)
         return A
 
     def _nonlinear_targets(self, symmetric: bool) -> Optional[list[tuple]]:

@@ -268,3 +268,17 @@ class CooPattern:
             A.setValuesCSR(self.indptr, self.indices, data)
         A.assemble()  # also tells PETSc the values changed (a factorisation is redone)
         A.setAttr(_BASE, (base, slots, A.stateGet()))
+
+    def fill_layered(self, A: PETSc.Mat, base: np.ndarray,
+                     writes: list[tuple[np.ndarray, np.ndarray]], slots: np.ndarray,
+                     added: np.ndarray) -> None:
+        """Fill a serial ``A`` with :func:`held_values` in one pass over its own array: CSR
+        ``base``, overwritten by each ``(at, values)`` of ``writes`` (slots of this
+        pattern), ``added`` added at ``slots`` (a nonlinear body's values over the
+        linear bodies', the contacts' tangents on top)."""
+        held = held_values(A)
+        held[:] = base
+        for at, values in writes:
+            held[at] = values
+        held[slots] += added
+        A.assemble()  # also tells PETSc the values changed (a factorisation is redone)
