@@ -121,6 +121,9 @@ class BlockProblem:
         #: checks of an iterate (collective), each returning why it is inadmissible or None;
         #: the residual of an inadmissible iterate is infinite (Newton fails, and cuts back)
         self.guards: list = []
+        #: checks of the same kind run only when the residual is not finite, to say why
+        #: (for a model whose residual is not finite wherever the check fails)
+        self.nonfinite_guards: list = []
         #: why the last evaluated iterate was inadmissible ("" if it was not)
         self.inadmissible = ""
 
@@ -280,14 +283,21 @@ class BlockProblem:
             self.inadmissible = next((r for r in (g() for g in self.guards) if r), "")
             if self.inadmissible:
                 return np.inf
+            parts = [(k, self.bodies[k].residual()) for k in self._assembled]
+            if self.nonfinite_guards and self.comm.allreduce(
+                    not all(np.isfinite(part).all() for _, part in parts), op=MPI.LOR):
+                self.inadmissible = next(
+                    (r for r in (g() for g in self.nonfinite_guards) if r), "")
+                if self.inadmissible:
+                    return np.inf
             K_linear = self.jacobians.K_linear
             if K_linear is not None:  # the homogeneous linear bodies: K u
                 K_linear.mult(x, b)
                 values = b.getArray()
             else:
                 values = np.zeros(self.layout.n_owned * self.gdim)
-            for k in self._assembled:
-                values[self.block_slice(k)] += self.bodies[k].residual()
+            for k, part in parts:
+                values[self.block_slice(k)] += part
             values -= self.f_ext
             b.setArray(values)
         with self.timers.measure("contact_assembly"):

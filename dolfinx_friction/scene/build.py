@@ -130,6 +130,12 @@ def strain_energy(body: Body, F3):
     raise ValueError(f"body {body.name!r}: unknown model {body.model!r}")
 
 
+def undefined_when_inverted(body: Body) -> bool:
+    """Whether the body's residual is not finite wherever ``det F <= 0`` at a quadrature
+    point (Neo-Hooke's ``J^(-2/3)``): its inversion guard need run only when it is not."""
+    return body.model == "neo-hookean"
+
+
 def cauchy_stress(field: BodyField):
     """The body's Cauchy stress as a 3 x 3 UFL tensor (plane strain in 2D: with the
     out-of-plane normal stress; axisymmetric: (r, z, theta))."""
@@ -314,8 +320,10 @@ class ContactProblem(DiscreteScene):
                                    contacts=list(self.pairs.values()),
                                    obstacles=len(scene.rigids),
                                    names=[b.name for b in scene.bodies])
-        self.system.guards += [self._inversion_guard(f) for f in self.fields
-                               if f.body.finite_strain]
+        for f in self.fields:
+            if f.body.finite_strain:
+                (self.system.nonfinite_guards if undefined_when_inverted(f.body)
+                 else self.system.guards).append(self._inversion_guard(f))
 
     def _follower_pressures(self) -> dict[tuple[str, str], object]:
         """A Constant per (finite-strain body, group) that some step loads with a pressure:
