@@ -95,7 +95,14 @@ from dolfinx_friction import _compat as compat
 from dolfinx_friction.nls.free_rows import FreeRows
 from dolfinx_friction.nls.interior import Interior
 
-DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+#: MUMPS without scaling (``ICNTL(8) = 0``): its default scaling is computed afresh at
+#: every numeric factorisation, a ninth of each on the finite-strain ironing of
+#: benchmarks/bench_ccx_nlgeom.py (45.8 -> 40.8 ms), and moved no Newton iteration and no
+#: reaction beyond 1.4e-11 of the kinds measured (RESULTS, "Finite strain: cost per
+#: Newton iteration")
+MUMPS = {"mat_mumps_icntl_8": 0}
+DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps",
+          **MUMPS}
 #: PETSc's own factorisation, for small serial systems
 #: (:func:`~dolfinx_friction.nls.defaults.factorisation`)
 NATIVE = {"ksp_type": "preonly", "pc_factor_mat_solver_type": "petsc",
@@ -105,7 +112,7 @@ PACKAGES = ("mumps", "petsc")
 #: GMRES's relative residual with a kept factorisation, unless the caller asks otherwise
 KRYLOV_RTOL = 1e-12
 REUSE = {"ksp_type": "gmres", "ksp_gmres_restart": 20, "ksp_atol": 0.0,
-         "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}  # max_it: ``max_krylov``
+         "pc_type": "lu", "pc_factor_mat_solver_type": "mumps", **MUMPS}  # max_it: max_krylov
 #: Jacobians factorised afresh after GMRES failed with a kept factorisation.
 PAUSE = 3
 #: Keep a factorisation only if it costs at least this many back-solves (in flops).
