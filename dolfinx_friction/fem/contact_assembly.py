@@ -55,7 +55,6 @@ class ContactAssembly:
         self._dof_cache: tuple = (None,)  # (candidates, their dofs)
         #: the couplings of the matrix pattern: sorted node-pair keys, global rows, cols
         self._held: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._slot_cache: tuple = (None, None)  # (candidates, held, slot)
 
     def surface_dofs(self) -> np.ndarray:
         """Sorted global dofs of every node this rank's part of the contact can couple: its
@@ -157,16 +156,12 @@ class ContactAssembly:
             slot.shape)] = -1
         return slot
 
-    def _coupling_slots(self) -> np.ndarray:
-        """(n_candidates, nd, nd) the index among :meth:`couplings` of each entry of each
-        candidate's tangent (-1 where a rigid obstacle's node has no dofs); made once per
-        search (and pattern)."""
-        candidates = self.interaction.candidates
-        if self._slot_cache[0] is not candidates or self._slot_cache[1] is not self._held:
-            nodes = candidates.nodes
-            slot = self._entry_slots(self._pair_index(self._keys(nodes, nodes)))
-            self._slot_cache = (candidates, self._held, slot)
-        return self._slot_cache[2]
+    def _coupling_slots(self, candidate: np.ndarray) -> np.ndarray:
+        """(len(candidate), nd, nd) the index among :meth:`couplings` of each entry of the
+        tangents of the candidates numbered ``candidate`` (-1 where a rigid obstacle's node
+        has no dofs): made for the evaluated elements only (few of a search's candidates)."""
+        nodes = self.interaction.candidates.nodes[candidate]
+        return self._entry_slots(self._pair_index(self._keys(nodes, nodes)))
 
     def _node_dofs(self, nodes: np.ndarray, bcs: Sequence = ()) -> np.ndarray:
         """(n, m * gdim) global dofs of the nodes ``nodes`` (n, m), -1 for nodes < 0 and for
@@ -323,7 +318,7 @@ class ContactAssembly:
         entries (0 where no element couples, and in the rows and columns of ``bcs``)."""
         el = self._evaluated()
         rows, _ = self.couplings()
-        slot = self._coupling_slots()[el.candidate]
+        slot = self._coupling_slots(el.candidate)
         K = self._own_part(el)[1].reshape(slot.shape)
         masked = self._masked_dofs(bcs)[el.candidate] < 0
         keep = (slot >= 0) & ~(masked[:, :, None] | masked[:, None, :])
