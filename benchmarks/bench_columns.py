@@ -18,7 +18,6 @@ flops_back-solve)``.
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 
@@ -78,11 +77,7 @@ def measure(K, repeats: int) -> dict:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--no-results", action="store_true")
-    args = ap.parse_args(argv)
+    args = bench_factor.arguments(argv, __doc__)
     from dolfinx_friction.nls.linear import COLUMN_SHARE
     machine = B.machine()
     rows = []

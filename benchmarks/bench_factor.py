@@ -125,12 +125,18 @@ def check(A, b, x, r) -> None:
     assert r.norm() <= 1e-10 * b.norm(), r.norm() / b.norm()
 
 
-def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def arguments(argv, doc: str) -> argparse.Namespace:
+    """The options of this bench and of those on its matrices (bench_columns): ``--quick``,
+    ``--repeats``, ``--no-results``; ``doc``: the script's docstring."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--no-results", action="store_true")
-    args = ap.parse_args(argv)
+    return ap.parse_args(argv)
+
+
+def main(argv=None) -> None:
+    args = arguments(argv, __doc__)
     machine = B.machine()
     sizes = QUICK if args.quick else SIZES
     data = {}

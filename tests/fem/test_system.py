@@ -114,6 +114,35 @@ def test_fill_over_writes_a_block_over_a_kept_base(comm):
         assert np.array_equal(_csr_rows(A, N), _csr_rows(expected, N))  # the same sums
 
 
+def test_fill_layered_writes_blocks_over_a_base_and_adds_on_top():
+    """``fill_layered`` (serial): the base, one block's values written over it at its
+    distinct slots, another block's sums added on top; fill after fill, the same matrix as
+    the values summed densely (the written block replaces the base where they meet)."""
+    from mpi4py import MPI
+    comm = MPI.COMM_SELF
+    rng = np.random.default_rng(7)
+    N = 8
+    cells = np.array([(i, j) for i in range(N) for j in range(N) if abs(i - j) <= 2])
+    over = cells[rng.permutation(len(cells))[:30]]  # distinct entries
+    blocks = [(cells[:, 0], cells[:, 1]), (over[:, 0], over[:, 1]),
+              (rng.integers(0, N, 40), rng.integers(0, N, 40))]
+    pattern = CooPattern(comm, N, blocks)
+    at = pattern.distinct_slots(1)
+    assert at is not None
+    A = pattern.create_matrix()
+    for _ in range(2):
+        base = pattern.gather_values(0, rng.standard_normal(len(cells)))
+        written, added = rng.standard_normal(len(over)), rng.standard_normal(40)
+        slots, sums = pattern.gather_slots(2, added)
+        pattern.fill_layered(A, base, [(at, written)], slots, sums)
+        B = A.duplicate()
+        pattern.fill(B, base)
+        expected = _csr_rows(B, N)
+        expected[over[:, 0], over[:, 1]] = written
+        np.add.at(expected, (blocks[2][0], blocks[2][1]), added)
+        assert np.allclose(_csr_rows(A, N), expected, rtol=0, atol=1e-14)
+
+
 def _boxes_scene(mesh, model: str = "linear", degree: int | None = None,
                  master: str = "foundation", **contact) -> Scene:
     """The block pressed on the foundation and slid; ``master = "plane"``: on a rigid plane
