@@ -252,8 +252,18 @@ class _Names:
         return self.used[key]
 
 
+#: CalculiX reads a number from the first 20 characters of its field and ignores the rest
+FIELD_WIDTH = 20
+
+
 def _num(v: float) -> str:
-    return repr(float(v))
+    """``v`` in at most :data:`FIELD_WIDTH` characters: its shortest repr, else as many
+    significant digits as fit (``7.959123334089213e-05`` would be read as 7.959)."""
+    text, digits = repr(float(v)), 17
+    while len(text) > FIELD_WIDTH:
+        digits -= 1
+        text = f"{float(v):.{digits}g}"
+    return text
 
 
 def _id_lines(ids: Sequence[int], per_line: int = 16) -> list[str]:

@@ -219,6 +219,28 @@ def test_face_numbers_and_loads(shared_dir, tets):
         assert faces_seen == set(range(1, 5 if tets else 7))
 
 
+@pytest.mark.ccx
+@needs_ccx
+def test_numbers_fit_calculix_fields(shared_dir):
+    """CalculiX reads a number from the first 20 characters of its field: a value whose
+    repr is longer (a coordinate near zero, a small pressure) must be written shorter, or
+    ``7.959123334089213e-05`` is read as 7.959 (it once inverted two elements of a Hertz
+    deck at the contact point: "nonpositive jacobian").  Every field of the deck fits, and
+    ccx's reaction balances the small pressure."""
+    mesh_path = _cube_mesh(shared_dir / "cube.msh")
+    p = 7.959123334089213e-05  # repr: 21 characters
+    scene = Scene(mesh=mesh_path, bodies=(Body("cube", E, NU),),
+                  steps=(Step("load", increments=1, bcs=(BC("x0", (0.0, 0.0, 0.0)),),
+                              loads=(Load("x1", pressure=p),)),))
+    ccx, _ = _run_ccx(scene, shared_dir / "numbers.inp")
+    # (the .dat file prints 7 significant digits)
+    np.testing.assert_allclose(ccx[0][1]["x0"], [p, 0.0, 0.0], rtol=1e-6, atol=1e-12)
+    if ROOT:
+        fields = [f.strip() for line in (shared_dir / "numbers.inp").read_text().splitlines()
+                  if not line.startswith("*") for f in line.split(",")]
+        assert max(map(len, fields)) <= 20
+
+
 def test_unsupported_scenes_raise(tmp_path):
     """Rigid obstacles have no CalculiX counterpart in the export: a clear error, not a deck."""
     scene = Scene(mesh=tmp_path / "none.msh", bodies=(Body("b", E, NU),),
