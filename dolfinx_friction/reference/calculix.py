@@ -33,10 +33,12 @@ that models the same problem as dolfinx_friction:
   written explicitly (CalculiX's own defaults come from
   the first material of the deck, ours from the slave body);
 * one ``*STEP`` per scene step, ``*STATIC, DIRECT`` with the scene's number of
-  equal increments.  In a ``*STATIC`` step CalculiX ramps boundary values and
-  loads linearly from their values at the end of the previous step to the new
-  totals, and they persist into later steps, as in the scene (checked: the
-  reactions agree increment by increment with a 2-increment press);
+  equal increments (``automatic=True``: ``*STATIC``, CalculiX's automatic
+  incrementation, starting at and never above that size).  In a ``*STATIC`` step
+  CalculiX ramps boundary values and loads linearly from their values at the end
+  of the previous step to the new totals, and they persist into later steps, as
+  in the scene (checked: the reactions agree increment by increment with a
+  2-increment press);
 * ``*NODE PRINT, TOTALS=ONLY`` of ``RF`` on every reaction group: the sum of
   the reaction forces, the same quantity and sign as our reactions -- except
   where a load acts on constrained nodes: CalculiX's ``RF`` is the internal
@@ -76,7 +78,8 @@ from dolfinx_friction.io.msh import GMSH_NAMES, MeshSplit, read_split
 from dolfinx_friction.scene.model import MODELS, Body, ContactPair, Scene
 
 __all__ = ["CCX_FACES", "CcxError", "CcxRun", "ccx_available", "ccx_executable", "parse_dat",
-           "read_mesh", "run_ccx", "slave_spacing", "write_inp", "DEFAULT_FIELD_CONTROLS"]
+           "read_dat", "read_mesh", "run_ccx", "slave_spacing", "write_inp",
+           "DEFAULT_FIELD_CONTROLS"]
 
 #: CalculiX face numbering (``S1``...) of its elements as 0-based local nodes,
 #: from the ``ifaceq``/``ifacet`` tables of the CalculiX sources (the node
@@ -254,6 +257,9 @@ class _Names:
 
 #: CalculiX reads a number from the first 20 characters of its field and ignores the rest
 FIELD_WIDTH = 20
+#: the smallest increment CalculiX's automatic incrementation may cut back to, as a share
+#: of the scene's (``write_inp(automatic=True)``)
+MIN_INCREMENT = 1e-4
 
 
 def _num(v: float) -> str:
@@ -351,13 +357,15 @@ def _material_lines(body: Body) -> list[str]:
 def write_inp(scene: Scene, path: Union[str, Path], *,
               field_controls: Optional[Sequence[Optional[float]]] = DEFAULT_FIELD_CONTROLS,
               time_controls: Optional[Sequence[Optional[float]]] = None,
-              mesh: Optional[CcxMesh] = None) -> CcxMesh:
+              mesh: Optional[CcxMesh] = None, automatic: bool = False) -> CcxMesh:
     """Write ``scene`` as a CalculiX input deck at ``path``; return the mesh as numbered there.
 
     ``field_controls``: the values of ``*CONTROLS, PARAMETERS=FIELD`` written in
     every step (``None`` entries keep CalculiX's default; ``field_controls=None``
     writes no card).  ``time_controls``: optional first line of
-    ``*CONTROLS, PARAMETERS=TIME INCREMENTATION``.  Raises
+    ``*CONTROLS, PARAMETERS=TIME INCREMENTATION``.  ``automatic``: CalculiX cuts an
+    increment back where it does not converge (its increments then end at other times than
+    the scene's; :attr:`CcxRun.times`), instead of stopping.  Raises
     :class:`NotImplementedError` for what has no CalculiX counterpart here
     (rigid obstacles, 2D, second-order cells, a component released after being
     prescribed) and :class:`ValueError` for groups the mesh does not have.
@@ -457,8 +465,9 @@ def write_inp(scene: Scene, path: Union[str, Path], *,
         n_inc = step.increments
         out += [f"** step {i}: {step.name}",
                 f"*STEP{', NLGEOM' if nlgeom else ''}, INC={max(100, 10 * n_inc)}",
-                "*STATIC, DIRECT",
-                f"{_num(1.0 / n_inc)}, 1.0"]
+                "*STATIC" if automatic else "*STATIC, DIRECT",
+                f"{_num(1.0 / n_inc)}, 1.0" + (f", {_num(MIN_INCREMENT / n_inc)}, "
+                                               f"{_num(1.0 / n_inc)}" if automatic else "")]
         if field_controls is not None:
             vals = list(field_controls)
             out += ["*CONTROLS, PARAMETERS=FIELD",
@@ -521,7 +530,16 @@ _TOTAL = re.compile(r"^\s*total force \(fx,fy,fz\) for set (\S+) and time\s+(\S+
 
 def parse_dat(path: Union[str, Path], groups: Optional[dict[str, str]] = None
               ) -> dict[int, dict[int, dict[str, np.ndarray]]]:
-    """Reaction totals of a ``.dat`` file: ``{step: {increment: {group: (fx, fy, fz)}}}``.
+    """Reaction totals of a ``.dat`` file: ``{step: {increment: {group: (fx, fy, fz)}}}``
+    (:func:`read_dat` without the times)."""
+    return read_dat(path, groups)[0]
+
+
+def read_dat(path: Union[str, Path], groups: Optional[dict[str, str]] = None
+             ) -> tuple[dict[int, dict[int, dict[str, np.ndarray]]], dict[int, list[float]]]:
+    """Reaction totals of a ``.dat`` file, ``{step: {increment: {group: (fx, fy, fz)}}}``,
+    and each step's output times ``{step: [t_1, t_2, ...]}`` (total times, increment k at
+    ``t_k``).
 
     The ``.dat`` file of a static analysis labels its blocks by the total time
     only.  Every step written by :func:`write_inp` has the time period 1, so
@@ -551,7 +569,7 @@ def parse_dat(path: Union[str, Path], groups: Optional[dict[str, str]] = None
             result.setdefault(step, {}).setdefault(len(seen), {})[groups.get(name, name)] = vec
             i = j
         i += 1
-    return result
+    return result, times
 
 
 @dataclass
@@ -561,6 +579,7 @@ class CcxRun:
     reactions: dict[int, dict[int, dict[str, np.ndarray]]]
     wall: float
     log: str
+    times: dict[int, list[float]]  # each step's output times: increment k ends at times[s][k - 1]
 
 
 def run_ccx(inp_path: Union[str, Path], *, threads: int = 1, timeout: float = 600.0,
@@ -599,7 +618,7 @@ def run_ccx(inp_path: Union[str, Path], *, threads: int = 1, timeout: float = 60
         m = re.match(r"^\*\* dolfinx_friction reaction (\S+) (.+)$", line)
         if m:
             groups[m.group(1)] = m.group(2)
-    reactions = parse_dat(dat, groups)
+    reactions, times = read_dat(dat, groups)
     if details:
-        return CcxRun(reactions, wall, log)
+        return CcxRun(reactions, wall, log, times)
     return reactions

@@ -241,6 +241,35 @@ def test_numbers_fit_calculix_fields(shared_dir):
         assert max(map(len, fields)) <= 20
 
 
+@pytest.mark.ccx
+@needs_ccx
+def test_automatic_incrementation(shared_dir):
+    """``write_inp(automatic=True)``: ``*STATIC`` with CalculiX's automatic incrementation,
+    from the scene's increment size and never above it; ``CcxRun.times`` are the output
+    times, and a problem that converges in every increment gives the fixed increments'
+    times and reactions (a Neo-Hookean cube stretched 5 % in 2 increments: NLGEOM, so
+    CalculiX does increment it)."""
+    mesh_path = _cube_mesh(shared_dir / "cube.msh")
+    scene = Scene(mesh=mesh_path, bodies=(Body("cube", E, NU, model="neo-hookean"),),
+                  steps=(Step("stretch", increments=2,
+                              bcs=(BC("x0", (0.0, 0.0, 0.0)), BC("x1", (0.05, None, None)))),))
+    if ROOT:
+        runs = {}
+        for automatic in (False, True):
+            inp = shared_dir / f"auto_{automatic}.inp"
+            calculix.write_inp(scene, inp, automatic=automatic)
+            lines = inp.read_text().splitlines()
+            k = next(i for i, ln in enumerate(lines) if ln.startswith("*STATIC"))
+            assert lines[k:k + 2] == (["*STATIC", "0.5, 1.0, 5e-05, 0.5"] if automatic
+                                      else ["*STATIC, DIRECT", "0.5, 1.0"])
+            runs[automatic] = calculix.run_ccx(inp, details=True)
+            assert runs[automatic].times == {0: [0.5, 1.0]}
+        for k in (1, 2):
+            R = runs[False].reactions[0][k]["x0"]
+            assert abs(R[0]) > 1.0
+            np.testing.assert_allclose(runs[True].reactions[0][k]["x0"], R, rtol=1e-6)
+
+
 def test_unsupported_scenes_raise(tmp_path):
     """Rigid obstacles have no CalculiX counterpart in the export: a clear error, not a deck."""
     scene = Scene(mesh=tmp_path / "none.msh", bodies=(Body("b", E, NU),),
