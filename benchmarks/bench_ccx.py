@@ -136,11 +136,12 @@ def our_reactions(result, groups) -> dict:
 # ----------------------------------------------------------------------------- kinds
 #: Hertz cylinder on a block (demos/hertz_cylinder.py's geometry and mesh), one layer thick
 HERTZ_K, HERTZ_INCREMENTS, HERTZ_PRESS, LAYER = 1.0e7, 10, 0.25, 0.1
-#: 11k, 23k, 33k, 71k dofs (ccx 2.20 stops in the first increment at 0.04 and 0.026:
-#: "nonpositive jacobian determinant")
+#: 11k, 23k, 33k, 71k dofs (at 71k ccx 2.20 diverges in increment 6 of 10 and runs with
+#: automatic incrementation: :func:`compare`)
 HERTZ_SIZES, HERTZ_QUICK = (0.08, 0.05, 0.04, 0.026), (0.08,)
 #: ironing (block length, nx, ny, cells on the die's arc): 15k, 22k, 34k, 71k dofs in 3D
-#: (at 71k ccx 2.20 stops in drag increment 32 of 40: "solution seems to diverge")
+#: (at 71k ccx 2.20 diverges in drag increment 32 of 40 and runs with automatic
+#: incrementation: :func:`compare`)
 IRONING_SIZES = ((20.0, 100, 20, 32), (20.0, 120, 24, 40), (20.0, 150, 30, 50),
                  (20.0, 216, 44, 72))
 IRONING_QUICK = ((10.0, 40, 6, 32),)
