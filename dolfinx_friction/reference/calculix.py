@@ -77,9 +77,8 @@ from dolfinx_friction.fem.materials import bulk_modulus, lame
 from dolfinx_friction.io.msh import GMSH_NAMES, MeshSplit, read_split
 from dolfinx_friction.scene.model import MODELS, Body, ContactPair, Scene
 
-__all__ = ["CCX_FACES", "CcxError", "CcxRun", "ccx_available", "ccx_executable", "parse_dat",
-           "read_dat", "read_mesh", "run_ccx", "slave_spacing", "write_inp",
-           "DEFAULT_FIELD_CONTROLS"]
+__all__ = ["CCX_FACES", "CcxError", "CcxRun", "ccx_available", "ccx_executable", "read_dat",
+           "read_mesh", "run_ccx", "slave_spacing", "write_inp", "DEFAULT_FIELD_CONTROLS"]
 
 #: CalculiX face numbering (``S1``...) of its elements as 0-based local nodes,
 #: from the ``ifaceq``/``ifacet`` tables of the CalculiX sources (the node
@@ -526,13 +525,6 @@ def ccx_available() -> bool:
 
 
 _TOTAL = re.compile(r"^\s*total force \(fx,fy,fz\) for set (\S+) and time\s+(\S+)\s*$")
-
-
-def parse_dat(path: Union[str, Path], groups: Optional[dict[str, str]] = None
-              ) -> dict[int, dict[int, dict[str, np.ndarray]]]:
-    """Reaction totals of a ``.dat`` file: ``{step: {increment: {group: (fx, fy, fz)}}}``
-    (:func:`read_dat` without the times)."""
-    return read_dat(path, groups)[0]
 
 
 def read_dat(path: Union[str, Path], groups: Optional[dict[str, str]] = None
