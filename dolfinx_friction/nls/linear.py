@@ -93,7 +93,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
 from dolfinx_friction.nls.free_rows import FreeRows
-from dolfinx_friction.nls.interior import Interior
+from dolfinx_friction.nls.interior import Interior, factor_entries
 
 #: MUMPS without scaling (``ICNTL(8) = 0``): its default scaling is computed afresh at
 #: every numeric factorisation, a ninth of each on the finite-strain ironing of
@@ -409,18 +409,12 @@ def forget_options(names: list[str]) -> None:
         opts.delValue(name)
 
 
-def _entries(F: PETSc.Mat) -> float:
-    """Entries of a MUMPS factorisation (at least 1)."""
-    entries = F.getMumpsInfog(20)  # negative: millions
-    return max(entries if entries >= 0 else -entries * 1e6, 1.0)
-
-
 def _costs(F: PETSc.Mat, symmetric: bool) -> tuple[float, float]:
     """The flops of a MUMPS factorisation and of a back-solve with it (4 per entry), counted
     as for LU: an LDL^T's doubled (its one triangle is both), so that every decision is the
     one LU's counts would take."""
     scale = 2.0 if symmetric else 1.0
-    return scale * F.getMumpsRinfog(3), scale * 4.0 * _entries(F)
+    return scale * F.getMumpsRinfog(3), scale * 4.0 * factor_entries(F)
 
 
 #: The condensed path may spend at most this many solves' flops more than the solves it
@@ -503,7 +497,7 @@ class Condensed:
         if F.getMumpsInfog(1) < 0:
             return False
         _, self._solve_flops = _costs(F, self.symmetric)
-        self._entries = _entries(F)  # whole columns of K^-1 are kept while they fit
+        self._entries = factor_entries(F)  # whole columns of K^-1 are kept while they fit
         self._J = None  # the operator K + C
         self._dofs = np.zeros(0, np.int64)
         self._y = K.createVecLeft()
