@@ -301,6 +301,14 @@ def _subsection(title: str) -> re.Pattern:
     return re.compile(rf"^### {re.escape(title)}\n.*?(?=^##+ |\Z)", re.S | re.M)
 
 
+def subsections(title: str) -> tuple[str, ...]:
+    """The titles of the subsections ``### ...`` of the section ``## title`` of RESULTS.md
+    (none where it has no such section): what :func:`write_section` keeps to keep them all."""
+    text = RESULTS.read_text() if RESULTS.exists() else ""
+    section = re.search(rf"^## {re.escape(title)}\n.*?(?=^## |\Z)", text, re.S | re.M)
+    return tuple(re.findall(r"^### (.+)$", section.group(0), re.M)) if section else ()
+
+
 def write_section(title: str, body: str, keep: tuple[str, ...] = ()) -> None:
     """Replace (or append) the section ``## title`` of RESULTS.md; other sections are kept,
     and so are its subsections ``### <keep>`` (written by other scripts)."""
