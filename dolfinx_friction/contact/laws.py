@@ -7,6 +7,7 @@ The normal force is ``F_N = A_p p(d)`` with slope ``dF_N/dg_N = -A_p p'(d)``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -29,6 +30,11 @@ class Law:
         p, dp = self.pressure(-np.asarray(g_N, dtype=float))
         return area * p, -area * dp
 
+    def bilinear(self, area: Array) -> Optional[tuple[Array, Array]]:
+        """``(k, s)`` [force / length, force] such that ``F_N = k max(d, 0) - s`` beyond the
+        law's regularisation (``|d| >> eps``), or None where the law is not of that form."""
+        return None
+
 
 @dataclass(frozen=True)
 class Linear(Law):
@@ -49,6 +55,12 @@ class Linear(Law):
 
     def cutoff(self, area):
         return _cutoff(self.c0 * np.sqrt(area), area)
+
+    def bilinear(self, area):
+        """``K A_p`` and the tension plateau ``sigma_inf A_p``: ``p -> K d - sigma_inf`` for
+        ``d >> eps`` and ``p -> -sigma_inf`` for ``d << -eps``."""
+        area = np.asarray(area, dtype=float)
+        return self.K * area, self.sigma_inf * area
 
 
 @dataclass(frozen=True)

@@ -421,6 +421,15 @@ class BlockProblem:
         that split does not hold (:meth:`BlockJacobian.split`)."""
         return self.jacobians.split()
 
+    def normal_models(self) -> Optional[list]:
+        """Every contact pair's elements at their last update as a
+        :class:`~dolfinx_friction.fem.node_to_surface.NormalModel` (this rank's), or None
+        where some pair has none (friction, a law that is not bilinear; collective)."""
+        models = [c.normal_model() if hasattr(c, "normal_model") else None
+                  for c in self.contacts]
+        ok = bool(models) and all(m is not None for m in models)
+        return models if self.comm.allreduce(int(not ok)) == 0 else None
+
     def rigid_body_modes(self) -> PETSc.NullSpace:
         """Translations and rotations of every body, orthonormal (collective): the near null
         space of elasticity for algebraic multigrid."""

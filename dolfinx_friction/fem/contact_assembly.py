@@ -91,7 +91,7 @@ class ContactAssembly:
         nodes all against all, and the rows its slave force spreads over against them."""
         c = self.interaction.candidates
         keys = [self._keys(c.nodes, c.nodes).ravel()]
-        keys += [self._keys(s.nodes[c.slave], c.nodes).ravel() for s in self._spreads()]
+        keys += [self._keys(s.nodes[c.slave], c.nodes).ravel() for s in self.spreads()]
         keys = np.concatenate(keys)
         return keys[keys >= 0]
 
@@ -119,7 +119,7 @@ class ContactAssembly:
         keys = [self._filled_keys()]
         if self._held is not None:
             keys.append(self._keys(near.nodes, near.nodes).ravel())
-        for spread in self._spreads() if self._held is not None else ():
+        for spread in self.spreads() if self._held is not None else ():
             rows = spread.nodes
             if spread is inter.mortar:
                 c = inter.candidates
@@ -163,7 +163,7 @@ class ContactAssembly:
         nodes = self.interaction.candidates.nodes[candidate]
         return self._entry_slots(self._pair_index(self._keys(nodes, nodes)))
 
-    def _node_dofs(self, nodes: np.ndarray, bcs: Sequence = ()) -> np.ndarray:
+    def node_dofs(self, nodes: np.ndarray, bcs: Sequence = ()) -> np.ndarray:
         """(n, m * gdim) global dofs of the nodes ``nodes`` (n, m), -1 for nodes < 0 and for
         the dofs of ``bcs``."""
         d = self.gdim
@@ -175,7 +175,7 @@ class ContactAssembly:
             dofs[fixed[at] == dofs] = -1
         return dofs
 
-    def _spreads(self) -> list:
+    def spreads(self) -> list:
         """What replaces some of the elements' own rows: the stars of quadratic slave faces
         on a rigid obstacle (the slave node's row), the mortar distribution (the master
         face's rows)."""
@@ -190,7 +190,7 @@ class ContactAssembly:
         them)."""
         f, K, roundoff = el.result.f, el.result.K, el.roundoff
         inter, d = self.interaction, self.gdim
-        if self._spreads():
+        if self.spreads():
             f, K, roundoff = f.copy(), K.copy(), roundoff.copy()
         if inter.slaves.distribution is not None:
             f[:, -1], K[:, -1], roundoff[:, -d:] = 0.0, 0.0, 0.0
@@ -207,7 +207,7 @@ class ContactAssembly:
         (:class:`~dolfinx_friction.fem.mortar_distribution.MortarDistribution`); one block
         per element and spread: row nodes (n, r), column nodes (n, c), forces (n, r, d),
         tangents (n, r, d, c, d) and round-off (n, r, d; with |weight|)."""
-        spreads = self._spreads()
+        spreads = self.spreads()
         if not spreads:
             return []
         el = self._evaluated()
@@ -225,8 +225,8 @@ class ContactAssembly:
         ``rows`` (n, r), column nodes ``cols`` (n, c)), -1 for absent nodes and for the rows
         and columns of ``bcs``."""
         slot = self._entry_slots(self._pair_index(self._keys(rows, cols)))
-        masked = (self._node_dofs(rows, bcs)[:, :, None] < 0) | \
-            (self._node_dofs(cols, bcs)[:, None, :] < 0)
+        masked = (self.node_dofs(rows, bcs)[:, :, None] < 0) | \
+            (self.node_dofs(cols, bcs)[:, None, :] < 0)
         slot[masked] = -1
         return slot
 
@@ -266,7 +266,7 @@ class ContactAssembly:
         keep = dofs >= 0
         b.setValues(dofs[keep].astype(PETSc.IntType), values[keep], addv=PETSc.InsertMode.ADD)
         for rows, _, f, _, _ in self._spread_blocks():
-            dofs = self._node_dofs(rows, bcs)
+            dofs = self.node_dofs(rows, bcs)
             keep = dofs >= 0
             b.setValues(dofs[keep].astype(PETSc.IntType), f.reshape(dofs.shape)[keep],
                         addv=PETSc.InsertMode.ADD)
@@ -286,8 +286,8 @@ class ContactAssembly:
         A.setValuesRCV(dofs, dofs, self._own_part(el)[1].reshape(-1, nd, nd),
                        addv=PETSc.InsertMode.ADD)
         for rows, cols, _, K, _ in self._spread_blocks():
-            r = self._node_dofs(rows, bcs).astype(PETSc.IntType)
-            c = self._node_dofs(cols, bcs).astype(PETSc.IntType)
+            r = self.node_dofs(rows, bcs).astype(PETSc.IntType)
+            c = self.node_dofs(cols, bcs).astype(PETSc.IntType)
             A.setValuesRCV(r, c, np.ascontiguousarray(K.reshape(len(r), r.shape[1], c.shape[1])),
                            addv=PETSc.InsertMode.ADD)
         A.assemble()
@@ -301,7 +301,7 @@ class ContactAssembly:
         s.setValues(dofs[keep].astype(PETSc.IntType), self._own_part(el)[2][keep],
                     addv=PETSc.InsertMode.ADD)
         for rows, _, _, _, roundoff in self._spread_blocks():
-            dofs = self._node_dofs(rows)
+            dofs = self.node_dofs(rows)
             keep = dofs >= 0
             s.setValues(dofs[keep].astype(PETSc.IntType), roundoff.reshape(dofs.shape)[keep],
                         addv=PETSc.InsertMode.ADD)
@@ -339,7 +339,7 @@ class ContactAssembly:
         blocks += [(r, c, K) for r, c, _, K, _ in self._spread_blocks()]
         out = []
         for r, c, K in blocks:
-            r, c = self._node_dofs(r), self._node_dofs(c)
+            r, c = self.node_dofs(r), self.node_dofs(c)
             K = K.reshape(len(r), r.shape[1], c.shape[1])
             keep = (r >= 0)[:, :, None] & (c >= 0)[:, None, :]
             out.append((np.broadcast_to(r[:, :, None], K.shape)[keep],

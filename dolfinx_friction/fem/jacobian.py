@@ -18,7 +18,7 @@ entries instead (:class:`JacobianSplit`, for the condensed solve).
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Optional
 
 import numpy as np
@@ -41,7 +41,8 @@ class JacobianSplit:
     sum over the ranks of their ``values`` at global ``(rows, cols)`` (this rank's elements'
     entries; repeated pairs add), all within the contact surfaces' global ``dofs`` (sorted,
     of every rank: the same on all).  With ``symmetric`` (``K`` is), the constrained
-    columns are zero in both: ``J`` is ``jacobian(x, symmetric=True)``."""
+    columns are zero in both: ``J`` is ``jacobian(x, symmetric=True)``.  ``fixed``: the
+    constrained global dofs (sorted, of every rank)."""
 
     bulk: PETSc.Mat
     dofs: np.ndarray
@@ -49,6 +50,7 @@ class JacobianSplit:
     cols: np.ndarray
     values: np.ndarray
     symmetric: bool = False
+    fixed: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
 
 def _same(kept: tuple, key: tuple) -> bool:
@@ -329,7 +331,7 @@ class BlockJacobian:
                 mine = np.concatenate([c.surface_dofs() for c in p.contacts])
                 self._surface_dofs = np.unique(np.concatenate(p.comm.allgather(mine)))
         return JacobianSplit(self._bulk_bc[1], self._surface_dofs, r[keep], k[keep], v[keep],
-                             p.bodies_symmetric())
+                             p.bodies_symmetric(), fixed)
 
     def _rigid_spring(self) -> float:
         """1e-12 of the largest bulk diagonal entry (found once)."""

@@ -142,6 +142,22 @@ class Support:
     normal: np.ndarray  # (n, gdim) their unit contact normals
 
 
+@dataclass
+class NormalModel:
+    """A frictionless pair's elements at their last evaluation as overclosures affine in
+    the unknowns (normals and projections frozen) under a bilinear law: element ``i``
+    carries ``F_N = k_i max(d_i + a_i . du, 0) - s_i`` on its ``dofs``.  What a Newton step
+    can solve exactly for the contact statuses (:meth:`NodeToSurface.normal_model`)."""
+
+    dofs: np.ndarray  # (n, m) global dofs of each element's nodes (-1: none)
+    a: np.ndarray  # (n, m) gradient of the overclosure on them [-]
+    d: np.ndarray  # (n,) overclosure the law sees [length]
+    force: np.ndarray  # (n,) normal force F_N at d (> 0 in compression) [force]
+    k: np.ndarray  # (n,) stiffness of the closed law [force / length]
+    s: np.ndarray  # (n,) tension of the open law within the cutoff [force]
+    closed: np.ndarray  # (n,) bool: the element's status is not open
+
+
 def _check_space(V, role: str) -> int:
     gdim = V.mesh.geometry.dim
     if V.dofmap.index_map_bs != gdim:
@@ -806,6 +822,19 @@ class NodeToSurface:
         return Support(self._slave_field.block, None if master is None else master.block,
                        self._obstacle, self.mu > 0.0,
                        self._interaction.slaves.X[s] + self._u_slaves[s], normal)
+
+    def normal_model(self) -> Optional[NormalModel]:
+        """This rank's elements at their last :meth:`update` as a :class:`NormalModel`;
+        None where the pair has friction, a law that is not bilinear
+        (:meth:`~dolfinx_friction.contact.laws.Law.bilinear`), or spreads its slave forces
+        (mortar weights, quadratic slave faces on an obstacle).  Not collective."""
+        model = self._interaction.normal_model() if not self._assembly.spreads() else None
+        if model is None:
+            return None
+        a, d, k, s, closed = model
+        el = self._interaction.elements
+        dofs = self._assembly.node_dofs(el.nodes)
+        return NormalModel(dofs, a.reshape(dofs.shape), d, el.result.F_N, k, s, closed)
 
     def exchange(self) -> Exchange:
         """What this rank sent and received for the pair's searches so far

@@ -159,6 +159,7 @@ class Elements:
     result: Optional[ElementResult] = None
     roundoff: Optional[np.ndarray] = None  # (n, nodes * gdim) round-off scale of the forces
     normal: Optional[np.ndarray] = None  # (n, gdim) unit contact normals at the evaluation
+    phi: Optional[np.ndarray] = None  # (n, nodes) master weights at xi, -1 for the slave node
 
 
 #: Parametric distance by which a slave node may pass its current face's edge and keep
@@ -483,7 +484,7 @@ class ContactInteraction:
         every = np.arange(len(s))
         u_slaves = self._slave_gather(u)
         kin = self._kinematics(el, every, u_slaves, self._gather(u), el.xi)
-        el.xi, el.normal = kin.xi, kin.normal
+        el.xi, el.normal, el.phi = kin.xi, kin.normal, kin.phi
         history = None
         if self.params.mu > 0.0:
             history = self.history.take(s)
@@ -516,6 +517,21 @@ class ContactInteraction:
         el.roundoff = (np.abs(el.result.K.reshape(-1, nd, nd)).sum(axis=2) * size[:, None]
                        + np.abs(el.result.f.reshape(-1, nd)))
         return el
+
+    def normal_model(self) -> Optional[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                             np.ndarray]]:
+        """The frictionless elements at their last evaluation as a bilinear law of affine
+        overclosures (:meth:`~dolfinx_friction.contact.laws.Law.bilinear`): ``(a, d, k, s,
+        closed)``, the overclosures' gradients (n, nodes, gdim) on the elements' nodes
+        (normals frozen: ``phi n``), the overclosures the law sees (n,) [length], ``k``, ``s``
+        (n,) and whether each is closed; None with friction or another law."""
+        el, law = self.elements, self.params.law
+        model = law.bilinear(self.slaves.area[el.slave]) if self.params.mu == 0.0 else None
+        if model is None or el.result is None:
+            return None
+        a = el.phi[:, :, None] * el.normal[:, None, :]
+        d = -(el.result.g_N + self._gap_offset - self.multiplier_N[el.slave])
+        return a, d, model[0], model[1], el.result.status != OPEN
 
     def _kinematics(self, el: Elements, rows: np.ndarray, u_slaves: np.ndarray,
                     u_master: np.ndarray, xi0: Optional[np.ndarray] = None) -> Kinematics:

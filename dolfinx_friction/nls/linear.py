@@ -93,6 +93,7 @@ from petsc4py import PETSc
 
 from dolfinx_friction import _compat as compat
 from dolfinx_friction.nls.free_rows import FreeRows
+from dolfinx_friction.nls import normal_qp
 from dolfinx_friction.nls.interior import Interior, factor_entries
 
 #: MUMPS without scaling (``ICNTL(8) = 0``): its default scaling is computed afresh at
@@ -161,6 +162,8 @@ class LinearSolver:
         self.failure = ""
         self._condensed: Optional[Condensed] = None
         self.condensed_solves = 0
+        #: steps with the frictionless contacts' statuses solved for (:meth:`solve_contact`)
+        self.contact_steps = 0
         #: a factorisation (any package) solves on the free rows where they are given
         self._factorises = pc.getType() in ("lu", "cholesky")
         self._free_rows = FreeRows()
@@ -236,6 +239,19 @@ class LinearSolver:
         self.condensed_solves += 1
         self._last = None
         return True
+
+    def solve_contact(self, split, models: list, b: PETSc.Vec, x: PETSc.Vec
+                      ) -> Optional[bool]:
+        """Newton's step with the frictionless contacts' statuses solved for, where the
+        condensed path holds the bulk factorisation (:meth:`Condensed.contact_step`); None
+        where it does not apply: then :meth:`solve_split` or :meth:`solve`."""
+        if self._condensed is None:
+            return None
+        solved = self._condensed.contact_step(split, models, b, x)
+        if solved:
+            self._last = None
+            self.contact_steps += 1
+        return solved
 
     def solve(self, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float = KRYLOV_RTOL,
               constrained: Optional[np.ndarray] = None,
@@ -478,13 +494,15 @@ class Condensed:
         self._gather: Optional[PETSc.Scatter] = None  # a vector's active entries, to all
         self._v_A: Optional[PETSc.Vec] = None  # (n_active,) on every rank
         self.columns = 0  # back-solves spent on G
+        self._scatter_at: Optional[tuple] = None  # (dofs, scatter, vector) of _values_at
         self.solves = 0  # solves done, each instead of a factorisation
         self._spent = 0.0  # flops spent on them (estimated)
         self.iterations = 0  # Richardson iterations
 
     def destroy(self) -> None:
         """Destroy its factorisation and PETSc objects (collective); ``K`` is the caller's."""
-        for obj in (self.bulk, self.outer, self._J, self._y, self._gather, self._v_A):
+        for obj in (self.bulk, self.outer, self._J, self._y, self._gather, self._v_A,
+                    *(self._scatter_at or ())[1:]):
             if obj is not None:
                 obj.destroy()
 
@@ -610,6 +628,69 @@ class Condensed:
         ok = self.outer.getConvergedReason() > 0
         self.solves += ok
         return ok
+
+    def contact_step(self, split, models: list, b: PETSc.Vec, x: PETSc.Vec) -> Optional[bool]:
+        """Newton's step with the frictionless contacts' statuses solved for
+        (:mod:`~dolfinx_friction.nls.normal_qp`), from ``K``'s kept factorisation: True
+        (``x`` the step) where the program's statuses differ from the iterate's, None
+        otherwise (the iterate's statuses are those of the linearised problem: Newton's
+        own step, with the law's exact tangent, follows) or where ``K`` is not the one this
+        path factorised (collective: the same on every rank)."""
+        if split.bulk is not self._K or not self._regular:
+            return None
+        el = normal_qp.gather(self.comm, models, split.fixed)
+        self._set_dofs(split.dofs)
+        where = np.searchsorted(self._dofs, el.dofs).clip(max=max(len(self._dofs) - 1, 0))
+        if len(el.dofs) and (not len(self._dofs) or (self._dofs[where] != el.dofs).any()):
+            return None  # a dof off the contact surfaces: not the split assumed
+        new = where[~self._known[where]]
+        self._spent += (COLUMN_SHARE * len(new) + 2) * self._solve_flops
+        if len(new):
+            self._add_columns(new)
+        cols = self._column[where]
+        G = self._G[np.ix_(where, cols)]
+        y = self._y
+        self.bulk.solve(b, y)  # K^-1 b
+        AG = el.A @ G
+        W = (el.A @ AG.T).T
+        kept = el.force + el.s  # the forces the law's model carries now
+        y_D = self._values_at(y, el.dofs)
+        q = el.d - el.A @ y_D + AG @ (el.A.T @ kept)  # d - A K^-1 r_b
+        lam = normal_qp.normal_forces(W, el.k, q)
+        if np.array_equal(lam > 0.0, el.closed):
+            return None
+        load = el.A.T @ (kept - lam)  # on el.dofs: x = K^-1 (b - P_D load)
+        if self._Z:
+            if len(self._Z) > 1:
+                self._Z = [np.hstack(self._Z)]
+            x.setArray(y.getArray(readonly=True) - self._Z[0][:, cols] @ load)
+        else:
+            start, end = self._K.getOwnershipRange()
+            owned = (el.dofs >= start) & (el.dofs < end)
+            rhs = b.copy()
+            values = rhs.getArray()
+            values[el.dofs[owned] - start] -= load[owned]
+            rhs.setArray(values)
+            self.bulk.solve(rhs, x)
+            rhs.destroy()
+        return True
+
+    def _values_at(self, v: PETSc.Vec, dofs: np.ndarray) -> np.ndarray:
+        """(len(dofs),) the values of the distributed ``v`` at global ``dofs``, on every
+        rank (collective; the scatter kept while the dofs are the same)."""
+        kept = self._scatter_at
+        if kept is None or not np.array_equal(kept[0], dofs):
+            if kept is not None:
+                kept[1].destroy()
+                kept[2].destroy()
+            target = PETSc.Vec().createSeq(len(dofs), comm=PETSc.COMM_SELF)
+            index = PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+            kept = self._scatter_at = (dofs.copy(), PETSc.Scatter().create(v, index, target,
+                                                                            None), target)
+            index.destroy()
+        kept[1].scatter(v, kept[2], addv=PETSc.InsertMode.INSERT,
+                        mode=PETSc.ScatterMode.FORWARD)
+        return kept[2].getArray(readonly=True).copy()
 
     def _set_active(self, active: np.ndarray) -> None:
         """The active dofs (global, sorted): this rank's among them, and the scatter that

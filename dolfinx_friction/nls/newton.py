@@ -77,7 +77,11 @@ class Newton:
     give up after that many iterations without a new lowest residual (0: never; default
     :data:`~dolfinx_friction.nls.defaults.STALL_ITERATIONS`).  ``chord``: the contraction
     below which a finite-strain problem's next step reuses the last factorisation (0:
-    never, a new Jacobian in every step; :meth:`_chord_step`).
+    never, a new Jacobian in every step; :meth:`_chord_step`).  ``solve_statuses``: where
+    the bodies are linear, every pair frictionless with a bilinear law and the bulk
+    factorisation kept (the condensed path), a step whose linearised problem changes a
+    contact status solves for the statuses exactly (:mod:`~dolfinx_friction.nls.normal_qp`)
+    instead of taking Newton's step on the iterate's statuses (False: never).
     """
 
     def __init__(self, rtol: float = 1e-9, atol: float = 1e-10, max_iterations: int = 30,
@@ -85,7 +89,8 @@ class Newton:
                  petsc_options: Optional[dict] = None,
                  reuse_factorisation: Optional[bool] = None,
                  convergence: str = "residual", reaction_tol: float = 1e-5,
-                 stall: int = STALL_ITERATIONS, chord: float = CHORD):
+                 stall: int = STALL_ITERATIONS, chord: float = CHORD,
+                 solve_statuses: bool = True):
         if convergence not in CONVERGENCE:
             raise ValueError(f"convergence = {convergence!r}: must be one of "
                              f"{', '.join(map(repr, CONVERGENCE))}")
@@ -93,6 +98,7 @@ class Newton:
         self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
         self.line_search = line_search
         self.stall, self.chord = stall, chord
+        self.solve_statuses = solve_statuses
         self.prefix, self.petsc_options = prefix, petsc_options
         self.reuse_factorisation = reuse_factorisation
         self.linear: Optional[LinearSolver] = None
@@ -206,8 +212,11 @@ class Newton:
                     return True
         split = problem.split() if solver.reuse else None
         if split is not None:
+            models = problem.normal_models() if self.solve_statuses else None
             with problem.timers.measure("linear_solve"):
-                solved = solver.solve_split(split, b, dx)
+                solved = solver.solve_contact(split, models, b, dx) if models else None
+                if solved is None:
+                    solved = solver.solve_split(split, b, dx)
             if solved is not None:
                 return solved
         A = problem.jacobian(x, symmetric=solver.symmetric)

@@ -66,7 +66,8 @@ class RunSummary:
     timers: Timers = field(default_factory=Timers)
     failure: str = ""
     #: the linear solver's work: ``preconditioner_setups``, ``krylov_iterations``,
-    #: ``condensed_solves``, ``chord_solves`` (empty before a run; None if no solver ran)
+    #: ``condensed_solves``, ``contact_steps``, ``chord_solves`` (empty before a run; None if
+    #: no solver ran)
     linear_solves: Optional[dict] = field(default_factory=dict)
 
 
@@ -104,7 +105,8 @@ class Solver:
         self.timers = self.system.timers
         self.newton = Newton(prefix=options_prefix, petsc_options=petsc_options,
                              reuse_factorisation=reuse_factorisation,
-                             chord=problem.scene.solver.chord)
+                             chord=problem.scene.solver.chord,
+                             solve_statuses=problem.scene.solver.solve_statuses)
         self.summary = RunSummary(timers=self.timers)
         self._bc_state: dict[str, tuple] = {}
         self._load_state: dict[str, tuple] = {}
@@ -283,6 +285,7 @@ class Solver:
             "preconditioner_setups": linear.factorisations,
             "krylov_iterations": linear.krylov_iterations,
             "condensed_solves": linear.condensed_solves,
+            "contact_steps": linear.contact_steps,
             "chord_solves": linear.chord_solves}
 
     # ----------------------------------------------------------- reports

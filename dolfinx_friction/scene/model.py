@@ -213,13 +213,16 @@ class SolverSettings:
     (None: where it pays); ``petsc_options`` over the chosen solver's, as ``(name, value)``
     pairs (a dict is taken); ``chord``: a finite-strain Newton step solves with the last
     factorisation where the step before cut the residual to this share or less, whole and
-    without a contact change (0: never; :data:`~dolfinx_friction.nls.defaults.CHORD`)."""
+    without a contact change (0: never; :data:`~dolfinx_friction.nls.defaults.CHORD`);
+    ``solve_statuses``: a Newton step of linear bodies in frictionless contact solves for
+    the contact statuses where that applies (:class:`~dolfinx_friction.Newton`)."""
 
     linear: str = "auto"
     direct_max_dofs: Optional[int] = None
     reuse_factorisation: Optional[bool] = None
     petsc_options: tuple[tuple[str, object], ...] = ()
     chord: float = CHORD
+    solve_statuses: bool = True
 
     def __post_init__(self) -> None:
         validate(self, RULES[SolverSettings])
@@ -326,6 +329,7 @@ RULES: dict[type, Rules] = {
         "reuse_factorisation": Key(v.boolean),
         "petsc_options": Key(v.petsc_options),
         "chord": Key(v.number(ge=0, lt=1)),
+        "solve_statuses": Key(v.boolean),
     }),
     Scene: Rules("", {
         "title": Key(v.string),
