@@ -59,10 +59,11 @@ def test_unknown_convergence_test_is_refused_naming_the_key():
 def test_stalled_increments_are_cut_back_to_the_same_answer():
     """Ten times the default penalty on the Hertz demo, Newton's own steps
     (``solver.solve_statuses = false``; solved statuses converge there in 16 iterations
-    without a cutback): the statuses at the edge of the zone cycle.  Giving up after ``stall_iterations`` without a new lowest residual (and cutting
-    back) reaches the same reactions in fewer iterations (measured 82 -> 69 with 6, the
-    same cutback, reactions equal to 1e-8; 1 gives up at any rise of the residual and cuts
-    back 16 times), and never on the last cutback.  Runs whose last increments differ agree
+    without a cutback): the statuses at the edge of the zone cycle.  Giving up after
+    ``stall_iterations`` without a new lowest residual (and cutting back) reaches the same
+    reactions in fewer iterations (measured 82 -> 69 with 6, the same cutback, reactions
+    equal to 1e-8; 1 gives up at any rise of the residual and cuts back 16 times), and
+    never on the last cutback.  Runs whose last increments differ agree
     to 2e-6 only: the slave areas are measured at each increment's start (measured 1.5e-6
     between 3 and 30 equal increments)."""
     base = ["contact.0.K=1e7", "step.0.increments=3", "solver.solve_statuses=false"]
