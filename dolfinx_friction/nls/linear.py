@@ -37,7 +37,9 @@ costs a third of a factorisation per solve, and 1,000 columns of ``G`` would not
 there), known once that path solved (with a
 factorisation it keeps: once that preconditioned a solve); ``K`` is factorised only if
 ``G``'s columns, at that path's back-solve flops, could pay (on a 35k-dof 3D block they
-cannot: 0.67 s of factorisation was spent for nothing).
+cannot: 0.67 s of factorisation was spent for nothing).  With frictionless pairs the same
+``K^-1`` entries give Newton's step with the contact statuses solved for
+(:meth:`Condensed.contact_step`, :mod:`~dolfinx_friction.nls.normal_qp`): two back-solves.
 Under MPI the same: ``K`` is factorised by distributed MUMPS, ``G``'s columns come from
 back-solves with distributed right-hand sides, and ``G``, ``C_AA`` and the dense solves are
 kept on every rank (redundantly, :class:`Condensed`); every decision uses global counts.

@@ -12,7 +12,9 @@ changes with the displacement (finite strain), a step after a whole step that ch
 contact status and cut the residual to :data:`~dolfinx_friction.nls.defaults.CHORD` of
 its value or less solves with the last factorisation instead (a chord step: no Jacobian is
 assembled or factorised; the next step takes a new one where the chord step contracted
-less); the convergence test is the same.
+less); the convergence test is the same.  Where the bodies are linear and every pair
+frictionless, a step whose linearised problem changes a contact status solves for the
+statuses (``solve_statuses``; :mod:`~dolfinx_friction.nls.normal_qp`).
 """
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ the step ``du = -K^-1 (r_b + A^T lam)`` balances ``lam = k max(d - A K^-1 r_b - 
 whose unique minimiser an active-set method (Lawson and Hanson's NNLS on the Cholesky
 factor) finds in finitely many steps without cycling, where Newton's step on the
 linearised law flips the statuses of the nodes at the edge of a growing zone back and
-forth (docs/theory.md §6.7).  No PETSc here: :class:`~dolfinx_friction.nls.linear.Condensed`
+forth (docs/theory.md §10.3).  No PETSc here: :class:`~dolfinx_friction.nls.linear.Condensed`
 supplies ``K^-1`` on the contact dofs.
 """
 from __future__ import annotations
