@@ -497,6 +497,7 @@ class Condensed:
         self._v_A: Optional[PETSc.Vec] = None  # (n_active,) on every rank
         self.columns = 0  # back-solves spent on G
         self._scatter_at: Optional[tuple] = None  # (dofs, scatter, vector) of _values_at
+        self._solved_for: Optional[np.ndarray] = None  # the r whose K^-1 r _y holds
         self.solves = 0  # solves done, each instead of a factorisation
         self._spent = 0.0  # flops spent on them (estimated)
         self.iterations = 0  # Richardson iterations
@@ -520,7 +521,7 @@ class Condensed:
         self._entries = factor_entries(F)  # whole columns of K^-1 are kept while they fit
         self._J = None  # the operator K + C
         self._dofs = np.zeros(0, np.int64)
-        self._y = K.createVecLeft()
+        self._y, self._solved_for = K.createVecLeft(), None
         return True
 
     def _set_dofs(self, dofs: np.ndarray) -> None:
@@ -652,6 +653,7 @@ class Condensed:
         cols = self._column[where]
         G = self._G[np.ix_(where, cols)]
         y = self._y
+        self._solved_for = None
         self.bulk.solve(b, y)  # K^-1 b
         AG = el.A @ G
         W = (el.A @ AG.T).T
@@ -660,6 +662,7 @@ class Condensed:
         q = el.d - el.A @ y_D + AG @ (el.A.T @ kept)  # d - A K^-1 r_b
         lam = normal_qp.normal_forces(W, el.k, q)
         if np.array_equal(lam > 0.0, el.closed):
+            self._solved_for = b.getArray(readonly=True).copy()  # y = K^-1 b, for apply
             return None
         load = el.A.T @ (kept - lam)  # on el.dofs: x = K^-1 (b - P_D load)
         if self._Z:
@@ -728,7 +731,12 @@ class Condensed:
     def apply(self, pc, r: PETSc.Vec, z: PETSc.Vec) -> None:
         """``z = (K + C)^-1 r`` (up to round-off): the preconditioner."""
         y = self._y
-        self.bulk.solve(r, y)
+        same = self._solved_for is not None and np.array_equal(self._solved_for,
+                                                               r.getArray(readonly=True))
+        kept = self.comm.allreduce(int(not same)) == 0
+        self._solved_for = None
+        if not kept:  # (else y holds K^-1 r from contact_step)
+            self.bulk.solve(r, y)
         w = np.linalg.solve(self._M, self._C @ self._at_active(y))
         if self._Z:  # K^-1 (r - P_A w) = y - (K^-1 P_A) w, from the kept columns
             w_all = np.zeros(self._Z[0].shape[1])
