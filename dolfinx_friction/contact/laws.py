@@ -30,9 +30,10 @@ class Law:
         p, dp = self.pressure(-np.asarray(g_N, dtype=float))
         return area * p, -area * dp
 
-    def bilinear(self, area: Array) -> Optional[tuple[Array, Array]]:
-        """``(k, s)`` [force / length, force] such that ``F_N = k max(d, 0) - s`` beyond the
-        law's regularisation (``|d| >> eps``), or None where the law is not of that form."""
+    def bilinear(self, area: Array) -> Optional[tuple[Array, Array, float]]:
+        """``(k, s, width)``: ``F_N = k max(d, 0) - s`` [force / length, force] where
+        ``|d| >= width`` [length] (the law's regularisation lies within), or None where the
+        law is not of that form."""
         return None
 
 
@@ -57,10 +58,10 @@ class Linear(Law):
         return _cutoff(self.c0 * np.sqrt(area), area)
 
     def bilinear(self, area):
-        """``K A_p`` and the tension plateau ``sigma_inf A_p``: ``p -> K d - sigma_inf`` for
-        ``d >> eps`` and ``p -> -sigma_inf`` for ``d << -eps``."""
+        """``K A_p``, the tension plateau ``sigma_inf A_p`` and ``10 eps``: at ``|d| = c eps``
+        ``p`` is ``K max(d, 0) - sigma_inf`` within ``sigma_inf / (3 c^2)``."""
         area = np.asarray(area, dtype=float)
-        return self.K * area, self.sigma_inf * area
+        return self.K * area, self.sigma_inf * area, 10.0 * self.eps
 
 
 @dataclass(frozen=True)

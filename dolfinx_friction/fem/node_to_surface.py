@@ -146,7 +146,8 @@ class Support:
 class NormalModel:
     """A frictionless pair's elements at their last evaluation as overclosures affine in
     the unknowns (normals and projections frozen) under a bilinear law: element ``i``
-    carries ``F_N = k_i max(d_i + a_i . du, 0) - s_i`` on its ``dofs``.  What a Newton step
+    carries ``F_N = k_i max(d_i + a_i . du, 0) - s_i`` on its ``dofs`` (where the
+    overclosure is at least ``width_i`` from 0: the law's regularisation lies within).  What a Newton step
     can solve exactly for the contact statuses (:meth:`NodeToSurface.normal_model`)."""
 
     dofs: np.ndarray  # (n, m) global dofs of each element's nodes (-1: none)
@@ -155,6 +156,7 @@ class NormalModel:
     force: np.ndarray  # (n,) normal force F_N at d (> 0 in compression) [force]
     k: np.ndarray  # (n,) stiffness of the closed law [force / length]
     s: np.ndarray  # (n,) tension of the open law within the cutoff [force]
+    width: np.ndarray  # (n,) the law is this bilinear one where |d| >= width [length]
     closed: np.ndarray  # (n,) bool: the element's status is not open
 
 
@@ -831,10 +833,11 @@ class NodeToSurface:
         model = self._interaction.normal_model() if not self._assembly.spreads() else None
         if model is None:
             return None
-        a, d, k, s, closed = model
+        a, d, k, s, width, closed = model
         el = self._interaction.elements
         dofs = self._assembly.node_dofs(el.nodes)
-        return NormalModel(dofs, a.reshape(dofs.shape), d, el.result.F_N, k, s, closed)
+        return NormalModel(dofs, a.reshape(dofs.shape), d, el.result.F_N, k, s,
+                           np.full(len(d), width), closed)
 
     def exchange(self) -> Exchange:
         """What this rank sent and received for the pair's searches so far

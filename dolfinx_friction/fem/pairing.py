@@ -518,20 +518,20 @@ class ContactInteraction:
                        + np.abs(el.result.f.reshape(-1, nd)))
         return el
 
-    def normal_model(self) -> Optional[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                                             np.ndarray]]:
+    def normal_model(self) -> Optional[tuple]:
         """The frictionless elements at their last evaluation as a bilinear law of affine
         overclosures (:meth:`~dolfinx_friction.contact.laws.Law.bilinear`): ``(a, d, k, s,
-        closed)``, the overclosures' gradients (n, nodes, gdim) on the elements' nodes
-        (normals frozen: ``phi n``), the overclosures the law sees (n,) [length], ``k``, ``s``
-        (n,) and whether each is closed; None with friction or another law."""
+        width, closed)``, the overclosures' gradients (n, nodes, gdim) on the elements'
+        nodes (normals frozen: ``phi n``), the overclosures the law sees (n,) [length], ``k``,
+        ``s`` (n,), the law's ``width`` and whether each is closed; None with friction or
+        another law."""
         el, law = self.elements, self.params.law
         model = law.bilinear(self.slaves.area[el.slave]) if self.params.mu == 0.0 else None
         if model is None or el.result is None:
             return None
         a = el.phi[:, :, None] * el.normal[:, None, :]
         d = -(el.result.g_N + self._gap_offset - self.multiplier_N[el.slave])
-        return a, d, model[0], model[1], el.result.status != OPEN
+        return a, d, *model, el.result.status != OPEN
 
     def _kinematics(self, el: Elements, rows: np.ndarray, u_slaves: np.ndarray,
                     u_master: np.ndarray, xi0: Optional[np.ndarray] = None) -> Kinematics:

@@ -661,7 +661,7 @@ class Condensed:
         y_D = self._values_at(y, el.dofs)
         q = el.d - el.A @ y_D + AG @ (el.A.T @ kept)  # d - A K^-1 r_b
         lam = normal_qp.normal_forces(W, el.k, q)
-        if np.array_equal(lam > 0.0, el.closed):
+        if lam is None or not el.changes(lam, q - W @ lam):
             self._solved_for = b.getArray(readonly=True).copy()  # y = K^-1 b, for apply
             return None
         load = el.A.T @ (kept - lam)  # on el.dofs: x = K^-1 (b - P_D load)

@@ -12,8 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.sparse
 
-from dolfinx_friction.nls.normal_qp import normal_forces
+from dolfinx_friction.nls.normal_qp import Elements, normal_forces
 from dolfinx_friction.scene.build import ContactProblem
 from dolfinx_friction.scene.driver import Solver
 from dolfinx_friction.scene.toml import load_scene
@@ -54,6 +55,34 @@ def test_normal_forces_solve_the_complementarity_problem(seed):
 
 def test_no_elements_no_forces():
     assert normal_forces(np.zeros((0, 0)), np.zeros(0), np.zeros(0)).shape == (0,)
+
+
+def test_no_forces_where_the_program_is_not_positive_definite():
+    """A body that only the contact holds leaves ``K`` singular but for round-off: ``W``
+    has its rigid motion as a direction some 1e15 times the others (measured on the patch
+    test's upper block), a node of no area has no stiffness: no forces (Newton's own step
+    is taken)."""
+    rng = np.random.default_rng(3)
+    V = rng.standard_normal((6, 6))
+    W, k, q = V @ V.T, np.full(6, 1e3), rng.standard_normal(6)
+    assert normal_forces(W, k, q) is not None
+    rigid = np.ones(6) / np.sqrt(6)
+    assert normal_forces(W + 2.6e15 * np.outer(rigid, rigid), k, q) is None
+    k[2] = 0.0
+    assert normal_forces(W, k, q) is None
+
+
+def test_only_decisive_status_changes_count():
+    """A status the program changes counts only where the overclosure, now and after the
+    step, is at least the law's width from 0 (within it the law is smooth)."""
+    el = Elements(np.zeros(0, np.int64), scipy.sparse.csr_matrix((3, 0)), np.array(
+        [1e-3, -1e-3, 1e-9]), np.zeros(3), np.ones(3), np.zeros(3), np.full(3, 1e-6),
+        np.array([True, False, True]))
+    assert not el.changes(np.array([1.0, 0.0, 1.0]), np.array([1e-3, -1e-3, 2e-9]))
+    assert not el.changes(np.array([1.0, 0.0, 0.0]), np.array([1e-3, -1e-3, -1e-3]))
+    assert not el.changes(np.array([0.0, 0.0, 1.0]), np.array([-1e-7, -1e-3, 1e-9]))
+    assert el.changes(np.array([0.0, 0.0, 1.0]), np.array([-1e-5, -1e-3, 1e-9]))
+    assert el.changes(np.array([1.0, 1.0, 1.0]), np.array([1e-3, 1e-3, 1e-9]))
 
 
 def _hertz(solve_statuses: bool):
