@@ -147,8 +147,9 @@ class NormalModel:
     """A frictionless pair's elements at their last evaluation as overclosures affine in
     the unknowns (normals and projections frozen) under a bilinear law: element ``i``
     carries ``F_N = k_i max(d_i + a_i . du, 0) - s_i`` on its ``dofs`` (where the
-    overclosure is at least ``width_i`` from 0: the law's regularisation lies within).  What a Newton step
-    can solve exactly for the contact statuses (:meth:`NodeToSurface.normal_model`)."""
+    overclosure is at least ``width_i`` from 0: the law's regularisation lies within).
+    What a Newton step can solve exactly for the contact statuses
+    (:meth:`NodeToSurface.normal_model`)."""
 
     dofs: np.ndarray  # (n, m) global dofs of each element's nodes (-1: none)
     a: np.ndarray  # (n, m) gradient of the overclosure on them [-]
