@@ -214,7 +214,9 @@ class Newton:
                     return True
         split = problem.split() if solver.reuse else None
         if split is not None:
-            models = problem.normal_models() if self.solve_statuses else None
+            # (where Newton's own last step changed no status, its next one seldom does)
+            models = (problem.normal_models() if self.solve_statuses and (
+                not trace.status_changes or trace.status_changes[-1]) else None)
             with problem.timers.measure("linear_solve"):
                 solved = solver.solve_contact(split, models, b, dx) if models else None
                 if solved is None:

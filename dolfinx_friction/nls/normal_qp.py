@@ -78,9 +78,10 @@ def gather(comm, models: list, fixed: np.ndarray) -> Elements:
         held |= fixed[np.searchsorted(fixed, dofs).clip(max=len(fixed) - 1)] == dofs
     keep = ~held & (a != 0.0)
     used = np.unique(dofs[keep])
-    A = scipy.sparse.csr_matrix((a[keep], (rows[keep].astype(np.int64),
-                                           np.searchsorted(used, dofs[keep]))),
-                                shape=(len(d), len(used)))
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows[keep].astype(np.int64),
+                                                        minlength=len(d)))])
+    A = scipy.sparse.csr_matrix((a[keep], np.searchsorted(used, dofs[keep]), indptr),
+                                shape=(len(d), len(used)))  # rows in order: CSR as it is
     return Elements(used, A, d, force, k, s, width, closed.astype(bool))
 
 
