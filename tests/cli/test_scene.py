@@ -743,6 +743,8 @@ BAD = [
      ["solver.direct_max_dofs = -1"]),
     ("solver-chord-not-below-one", "example", [put("solver", {"chord": 1})],
      ["solver.chord = 1", "must be < 1"]),
+    ("solver-solve-statuses-not-boolean", "example", [put("solver", {"solve_statuses": 1})],
+     ["solver.solve_statuses = 1"]),
     ("solver-options-not-a-table", "example", [put("solver", {"petsc_options": "-ksp_type cg"})],
      ["solver.petsc_options", "table of PETSc options"]),
     ("solver-option-with-dash", "example", [put("solver", {"petsc_options": {"-ksp_type": "cg"}})],
