@@ -635,10 +635,11 @@ class Condensed:
     def contact_step(self, split, models: list, b: PETSc.Vec, x: PETSc.Vec) -> Optional[bool]:
         """Newton's step with the frictionless contacts' statuses solved for
         (:mod:`~dolfinx_friction.nls.normal_qp`), from ``K``'s kept factorisation: True
-        (``x`` the step) where the program's statuses differ from the iterate's, None
-        otherwise (the iterate's statuses are those of the linearised problem: Newton's
-        own step, with the law's exact tangent, follows) or where ``K`` is not the one this
-        path factorised (collective: the same on every rank)."""
+        (``x`` the step) where the program changes a status decisively
+        (:meth:`~dolfinx_friction.nls.normal_qp.Elements.changes`), None otherwise (Newton's
+        own step, with the law's exact tangent, follows), where the program is not
+        numerically positive definite, or where ``K`` is not the one this path factorised
+        (collective: the same on every rank)."""
         if split.bulk is not self._K or not self._regular:
             return None
         el = normal_qp.gather(self.comm, models, split.fixed)
