@@ -12,8 +12,8 @@
   shared with other jobs, and time-sharing inflates wall times by an unknown,
   varying factor, so the tables show CPU seconds and list the wall seconds too.
 * :func:`machine` describes the machine (nproc, CPU, RAM, date, load average),
-  :func:`write_section` replaces one ``## `` section of ``benchmarks/RESULTS.md``
-  and leaves every other section alone.
+  :func:`write_section` replaces one ``## `` section of ``benchmarks/RESULTS.md`` (its
+  earlier subsections kept) and leaves every other section alone.
 * :func:`demo_module` imports a demo script (``demos/<name>.py``) to reuse its
   ``build_mesh``.
 
@@ -301,21 +301,18 @@ def _subsection(title: str) -> re.Pattern:
     return re.compile(rf"^### {re.escape(title)}\n.*?(?=^##+ |\Z)", re.S | re.M)
 
 
-def subsections(title: str) -> tuple[str, ...]:
-    """The titles of the subsections ``### ...`` of the section ``## title`` of RESULTS.md
-    (none where it has no such section): what :func:`write_section` keeps to keep them all."""
-    text = RESULTS.read_text() if RESULTS.exists() else ""
-    section = re.search(rf"^## {re.escape(title)}\n.*?(?=^## |\Z)", text, re.S | re.M)
-    return tuple(re.findall(r"^### (.+)$", section.group(0), re.M)) if section else ()
-
-
-def write_section(title: str, body: str, keep: tuple[str, ...] = ()) -> None:
+def write_section(title: str, body: str, keep: tuple[str, ...] | None = None) -> None:
     """Replace (or append) the section ``## title`` of RESULTS.md; other sections are kept,
-    and so are its subsections ``### <keep>`` (written by other scripts)."""
+    and so are its subsections ``### <keep>`` (default: every subsection ``body`` does not
+    write anew: the earlier runs recorded under it, and what other scripts wrote there)."""
     text = RESULTS.read_text() if RESULTS.exists() else "# Benchmarks\n"
     block = f"## {title}\n\n{body.strip()}\n"
     pattern = re.compile(rf"^## {re.escape(title)}\n.*?(?=^## |\Z)", re.S | re.M)
     old = pattern.search(text)
+    if keep is None:
+        written = set(re.findall(r"^### (.+)$", body, re.M))
+        keep = tuple(t for t in re.findall(r"^### (.+)$", old.group(0), re.M)
+                     if t not in written) if old else ()
     for sub in keep:
         kept = _subsection(sub).search(old.group(0)) if old else None
         if kept:

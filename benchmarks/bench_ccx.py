@@ -529,8 +529,7 @@ def main(argv=None) -> None:
         print(text)
         if not args.no_results:
             kinds_chart(rows, machine)
-            title = "Side by side with CalculiX: the problems its users run"
-            B.write_section(title, text, keep=B.subsections(title))  # the earlier runs stay
+            B.write_section("Side by side with CalculiX: the problems its users run", text)
         return 0
     rows = []
     for n in sizes:
