@@ -493,10 +493,9 @@ class Condensed:
         self._known = np.zeros(0, bool)  # per surface dof: its column of G is computed
         self._column = np.zeros(0, np.int64)  # per surface dof: its column in _G
         self._active = np.zeros(0, np.int64)  # the dofs where C is not zero (global)
-        self._gather: Optional[PETSc.Scatter] = None  # a vector's active entries, to all
-        self._v_A: Optional[PETSc.Vec] = None  # (n_active,) on every rank
+        self._at_active = _Gather()  # a vector's values at the active dofs, on every rank
         self.columns = 0  # back-solves spent on G
-        self._scatter_at: Optional[tuple] = None  # (dofs, scatter, vector) of _values_at
+        self._at_model = _Gather()  # ... at the dofs of contact_step's elements
         self._solved_for: Optional[np.ndarray] = None  # the r whose K^-1 r _y holds
         self.solves = 0  # solves done, each instead of a factorisation
         self._spent = 0.0  # flops spent on them (estimated)
@@ -504,8 +503,7 @@ class Condensed:
 
     def destroy(self) -> None:
         """Destroy its factorisation and PETSc objects (collective); ``K`` is the caller's."""
-        for obj in (self.bulk, self.outer, self._J, self._y, self._gather, self._v_A,
-                    *(self._scatter_at or ())[1:]):
+        for obj in (self.bulk, self.outer, self._J, self._y, self._at_active, self._at_model):
             if obj is not None:
                 obj.destroy()
 
@@ -659,7 +657,7 @@ class Condensed:
         AG = el.A @ G
         W = (el.A @ AG.T).T
         kept = el.force + el.s  # the forces the law's model carries now
-        y_D = self._values_at(y, el.dofs)
+        y_D = self._at_model(y, el.dofs)
         q = el.d - el.A @ y_D + AG @ (el.A.T @ kept)  # d - A K^-1 r_b
         lam = normal_qp.normal_forces(W, el.k, q)
         if lam is None or not el.changes(lam, q - W @ lam):
@@ -681,52 +679,18 @@ class Condensed:
             rhs.destroy()
         return True
 
-    def _values_at(self, v: PETSc.Vec, dofs: np.ndarray) -> np.ndarray:
-        """(len(dofs),) the values of the distributed ``v`` at global ``dofs``, on every
-        rank (collective; the scatter kept while the dofs are the same)."""
-        kept = self._scatter_at
-        if kept is None or not np.array_equal(kept[0], dofs):
-            if kept is not None:
-                kept[1].destroy()
-                kept[2].destroy()
-            target = PETSc.Vec().createSeq(len(dofs), comm=PETSc.COMM_SELF)
-            index = PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
-            kept = self._scatter_at = (dofs.copy(), PETSc.Scatter().create(v, index, target,
-                                                                            None), target)
-            index.destroy()
-        kept[1].scatter(v, kept[2], addv=PETSc.InsertMode.INSERT,
-                        mode=PETSc.ScatterMode.FORWARD)
-        return kept[2].getArray(readonly=True).copy()
-
     def _set_active(self, active: np.ndarray) -> None:
-        """The active dofs (global, sorted): this rank's among them, and the scatter that
-        gives every rank a vector's values at all of them (kept while they are the same)."""
-        if self._gather is not None and np.array_equal(active, self._active):
-            return
+        """The active dofs (global, sorted) and this rank's among them."""
         self._active = active
         start, end = self._K.getOwnershipRange()
         owned = (active >= start) & (active < end)
         self._owned, self._local = owned, active[owned] - start
-        if self._gather is not None:
-            self._gather.destroy()
-            self._v_A.destroy()
-        self._v_A = PETSc.Vec().createSeq(len(active), comm=PETSc.COMM_SELF)
-        index = PETSc.IS().createGeneral(active.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
-        self._gather = PETSc.Scatter().create(self._y, index, self._v_A, None)
-        index.destroy()
-
-    def _at_active(self, v: PETSc.Vec) -> np.ndarray:
-        """(n_active,) the values of the distributed ``v`` at the active dofs, on every
-        rank (collective)."""
-        self._gather.scatter(v, self._v_A, addv=PETSc.InsertMode.INSERT,
-                             mode=PETSc.ScatterMode.FORWARD)
-        return self._v_A.getArray(readonly=True)
 
     def mult(self, mat, v: PETSc.Vec, y: PETSc.Vec) -> None:
         """``y = (K + C) v``: the Jacobian, without assembling it."""
         self._K.mult(v, y)
         values = y.getArray().copy()
-        values[self._local] += (self._C @ self._at_active(v))[self._owned]
+        values[self._local] += (self._C @ self._at_active(v, self._active))[self._owned]
         y.setArray(values)
 
     def apply(self, pc, r: PETSc.Vec, z: PETSc.Vec) -> None:
@@ -738,7 +702,7 @@ class Condensed:
         self._solved_for = None
         if not kept:  # (else y holds K^-1 r from contact_step)
             self.bulk.solve(r, y)
-        w = np.linalg.solve(self._M, self._C @ self._at_active(y))
+        w = np.linalg.solve(self._M, self._C @ self._at_active(y, self._active))
         if self._Z:  # K^-1 (r - P_A w) = y - (K^-1 P_A) w, from the kept columns
             w_all = np.zeros(self._Z[0].shape[1])
             w_all[self._cols] = w
@@ -748,6 +712,33 @@ class Condensed:
         values[self._local] -= w[self._owned]
         y.setArray(values)
         self.bulk.solve(y, z)
+
+
+class _Gather:
+    """The values of a distributed vector at given global dofs, on every rank (collective;
+    the scatter kept while the dofs are the same)."""
+
+    def __init__(self) -> None:
+        self._kept: Optional[tuple] = None  # (dofs, scatter, sequential vector)
+
+    def __call__(self, v: PETSc.Vec, dofs: np.ndarray) -> np.ndarray:
+        """(len(dofs),) ``v`` at ``dofs`` (a view, valid until the next call)."""
+        if self._kept is None or not np.array_equal(self._kept[0], dofs):
+            self.destroy()
+            target = PETSc.Vec().createSeq(len(dofs), comm=PETSc.COMM_SELF)
+            index = PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+            self._kept = (dofs.copy(), PETSc.Scatter().create(v, index, target, None), target)
+            index.destroy()
+        _, scatter, target = self._kept
+        scatter.scatter(v, target, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        return target.getArray(readonly=True)
+
+    def destroy(self) -> None:
+        """Destroy the scatter and vector it keeps."""
+        if self._kept is not None:
+            self._kept[1].destroy()
+            self._kept[2].destroy()
+            self._kept = None
 
 
 class _Callbacks:
