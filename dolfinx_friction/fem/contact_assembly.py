@@ -330,6 +330,21 @@ class ContactAssembly:
                                   minlength=len(rows))
         return values
 
+    def coupling_entries(self) -> tuple[np.ndarray, np.ndarray]:
+        """The current elements' tangents by their index among :meth:`couplings`:
+        ``(index, values)``, ``index`` distinct (what :meth:`coupling_values` holds there,
+        without ``bcs``; elsewhere it is zero)."""
+        el = self._evaluated()
+        slot = self._coupling_slots(el.candidate).ravel()
+        K = self._own_part(el)[1].ravel()
+        blocks = [(slot, K)] + [(self._block_slots(r, c, ()).ravel(), K_.ravel())
+                                for r, c, _, K_, _ in self._spread_blocks()]
+        index = np.concatenate([s for s, _ in blocks])
+        values = np.concatenate([v for _, v in blocks])
+        keep = index >= 0
+        index, inverse = np.unique(index[keep], return_inverse=True)
+        return index, np.bincount(inverse, weights=values[keep], minlength=len(index))
+
     def element_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Global ``(rows, cols, values)`` of the current elements' tangents only (what
         :meth:`coupling_values` holds where it is not zero by construction; a rigid

@@ -720,6 +720,12 @@ class NodeToSurface:
         entries (0 where no element couples, and in the rows and columns of ``bcs``)."""
         return self._assembly.coupling_values(bcs)
 
+    def coupling_entries(self) -> tuple[np.ndarray, np.ndarray]:
+        """The current elements' tangent values by their index among :meth:`couplings`:
+        ``(index, values)``, ``index`` distinct (what :meth:`coupling_values` holds there
+        without bcs; zero elsewhere): a few entries where a search found many candidates."""
+        return self._assembly.coupling_entries()
+
     def element_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Global ``(rows, cols, values)`` of the current elements' tangents only (what
         :meth:`coupling_values` holds where it is not zero by construction; a rigid

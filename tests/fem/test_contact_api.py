@@ -161,6 +161,13 @@ def test_jacobian_two_bodies_matches_central_differences(degree, distribution, m
           f"mu = {mu}: FD rel error {err:.2e}, statuses {sorted(statuses(contact))}")
     assert ({1, 2} if mu > 0 else {2}) <= statuses(contact)
     assert err < 1e-7
+    # the sparse form of the tangent (the one-pass fill's) holds the dense one's values
+    index, values = contact.coupling_entries()
+    dense = contact.coupling_values()
+    elsewhere = np.ones(len(dense), bool)
+    elsewhere[index] = False
+    assert len(index) and np.allclose(values, dense[index], rtol=1e-14, atol=0.0)
+    assert not dense[elsewhere].any()
 
 
 @pytest.mark.parametrize("distribution", ["nodal", "mortar"])
@@ -427,6 +434,13 @@ def test_jacobian_mortar_in_3d_matches_central_differences(mu):
           f"{sorted(statuses(contact))}")
     assert ({1, 2} if mu > 0 else {2}) <= statuses(contact)
     assert err < 1e-7
+    # the sparse form of the tangent (the one-pass fill's) holds the dense one's values
+    index, values = contact.coupling_entries()
+    dense = contact.coupling_values()
+    elsewhere = np.ones(len(dense), bool)
+    elsewhere[index] = False
+    assert len(index) and np.allclose(values, dense[index], rtol=1e-14, atol=0.0)
+    assert not dense[elsewhere].any()
 
 
 def circle_distance(center, radius):
