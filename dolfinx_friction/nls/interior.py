@@ -70,12 +70,17 @@ class Interior:
         self.K_IS: Optional[PETSc.Mat] = None
         self.Z: Optional[np.ndarray] = None  # K_II^-1 K_IS (|I|, |S|), where kept
 
-    def _set_up(self, J: PETSc.Mat, constrained: np.ndarray, interior: np.ndarray) -> None:
-        """Factorise ``K_II``, compute ``D`` (when the rows changed)."""
+    def set_up(self, J: PETSc.Mat, constrained: np.ndarray, interior: np.ndarray) -> bool:
+        """Factorise ``K_II``, compute ``D`` (when the rows changed); whether the path is
+        taken (:meth:`solve` solves the condensed system ``J_PP - D``)."""
         key = self._key
-        if key is not None and np.array_equal(key[0], constrained) and \
-                np.array_equal(key[1], interior):
-            return
+        if key is None or not (np.array_equal(key[0], constrained)
+                               and np.array_equal(key[1], interior)):
+            self._make(J, constrained, interior)
+        return self._usable
+
+    def _make(self, J: PETSc.Mat, constrained: np.ndarray, interior: np.ndarray) -> None:
+        """:meth:`set_up` for new rows."""
         self._key, self._pattern = (constrained.copy(), interior.copy()), None
         n = J.getSize()[0]
         indptr, cols, _ = J.getValuesCSR()
@@ -200,9 +205,7 @@ class Interior:
         """``solve(A, b, x)`` on the condensed system, then ``x`` in every row; None (``x``
         untouched) where the path is not taken (``D`` too large, no interior).  ``again``:
         with the condensed matrix of the last call as it was (not refilled from ``J``)."""
-        if not again:
-            self._set_up(J, constrained, interior)
-        if not self._usable:
+        if not (self._usable if again else self.set_up(J, constrained, interior)):
             return None
         B = self._B if again else self._matrix(J)
         bv = b.getArray(readonly=True)

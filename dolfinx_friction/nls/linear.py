@@ -106,6 +106,16 @@ from dolfinx_friction.nls.interior import Interior, factor_entries
 MUMPS = {"mat_mumps_icntl_8": 0}
 DIRECT = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps",
           **MUMPS}
+#: MUMPS's ordering of the condensed system ``J_PP - D`` of
+#: :mod:`~dolfinx_friction.nls.interior` (its Schur complement ``D`` a dense block): AMF.
+#: Estimated elimination flops (RINFOG(1)) AMF / PORD, MUMPS's automatic choice there (no
+#: METIS or SCOTCH in the packages): 8.4e6 / 1.5e7 on the press + shear block of
+#: benchmarks/bench_ccx_nlgeom.py, 1.13e7 / 1.15e7 and 3.24e8 / 3.66e8 on its test and full
+#: ironing.  (Elsewhere the automatic choice stays: on the 3D Hertz and sliding-block
+#: demos PORD is the cheaper one, on the 2D Hertz cylinder AMF, by 4-24 %.)
+CONDENSED_ORDERING = {"mat_mumps_icntl_7": 2}
+#: MUMPS's orderings by the number it reports (INFOG(7))
+MUMPS_ORDERINGS = {0: "amd", 2: "amf", 3: "scotch", 4: "pord", 5: "metis", 6: "qamd"}
 #: PETSc's own factorisation, for small serial systems
 #: (:func:`~dolfinx_friction.nls.defaults.factorisation`)
 NATIVE = {"ksp_type": "preonly", "pc_factor_mat_solver_type": "petsc",
@@ -177,6 +187,8 @@ class LinearSolver:
         self._fresh = False  # the last attempt factorised
         #: solves with the last factorisation by :meth:`solve_again`
         self.chord_solves = 0
+        #: MUMPS's ordering in its last fresh factorisation (:data:`MUMPS_ORDERINGS`)
+        self._ordering = ""
 
     def _configured(self, comm, reuse: bool) -> PETSc.KSP:
         """A KSP with this solver's defaults and options under a prefix of its own."""
@@ -186,6 +198,7 @@ class LinearSolver:
                     **(NATIVE if self._native else {})}
         # they stay while this solver may factorise (MUMPS reads its own then)
         own, written = private_options(self._prefix, {**defaults, **options})
+        self._written = written  # (more are written with the condensed path's ordering)
         weakref.finalize(self, forget_options, written).atexit = False
         return self._new_ksp(comm, own)
 
@@ -199,7 +212,8 @@ class LinearSolver:
 
     def settings(self) -> dict:
         """The solver in use: ``ksp_type`` (``gmres`` on a kept factorisation, when one is
-        kept), ``pc_type``, ``factor_solver_type`` (factorisations only),
+        kept), ``pc_type``, ``factor_solver_type`` (factorisations only), ``ordering``
+        (PETSc's; MUMPS's in its last fresh factorisation, once there was one),
         ``reuse_factorisation``."""
         pc = self.ksp.getPC()
         out = {"ksp_type": "gmres" if self.reuse else self.ksp.getType(),
@@ -209,6 +223,8 @@ class LinearSolver:
             if out["factor_solver_type"] == "petsc":
                 out["ordering"] = PETSc.Options().getString(
                     self.ksp.getOptionsPrefix() + "pc_factor_mat_ordering_type", "nd")
+            elif self._ordering:
+                out["ordering"] = self._ordering
         out["reuse_factorisation"] = self.reuse
         return out
 
@@ -300,6 +316,8 @@ class LinearSolver:
         """``solve(A, b_, x_)`` on the free rows, with the linear interior condensed out
         where that path is taken; ``again``: with the matrices of the last call."""
         if constant is not None and len(constant):
+            if not again and self._interior.set_up(J, constrained, constant):
+                self._written += write_options(self.ksp.getOptionsPrefix(), CONDENSED_ORDERING)
             ok = self._interior.solve(solve, J, b, x, constrained, constant, again)
             if ok is not None:
                 return ok
@@ -351,6 +369,9 @@ class LinearSolver:
         if not keep:
             self.factorisations += 1
             self._factored_size = J.getSize()
+            if self.ksp.getPC().getFactorSolverType() == "mumps":
+                self._ordering = MUMPS_ORDERINGS.get(
+                    self.ksp.getPC().getFactorMatrix().getMumpsInfog(7), "other")
             self._pays = self.reuse
             if self._counted:
                 F = self.ksp.getPC().getFactorMatrix()
