@@ -128,6 +128,17 @@ def fd_error(problem, contact, seed=0) -> float:
     return tangent_error(residual, x, A, directions, 1e-6 * scale)
 
 
+def assert_sparse_tangent(contact) -> None:
+    """The sparse form of the tangent (what the one-pass fill beside a finite-strain body
+    adds) holds the dense one's values, and the dense one is zero elsewhere."""
+    index, values = contact.coupling_entries()
+    dense = contact.coupling_values()
+    elsewhere = np.ones(len(dense), bool)
+    elsewhere[index] = False
+    assert len(index) and np.allclose(values, dense[index], rtol=1e-14, atol=0.0)
+    assert not dense[elsewhere].any()
+
+
 def statuses(contact) -> set:
     found = set(contact.state().status.tolist())
     return set().union(*MPI.COMM_WORLD.allgather(found))
@@ -161,13 +172,7 @@ def test_jacobian_two_bodies_matches_central_differences(degree, distribution, m
           f"mu = {mu}: FD rel error {err:.2e}, statuses {sorted(statuses(contact))}")
     assert ({1, 2} if mu > 0 else {2}) <= statuses(contact)
     assert err < 1e-7
-    # the sparse form of the tangent (the one-pass fill's) holds the dense one's values
-    index, values = contact.coupling_entries()
-    dense = contact.coupling_values()
-    elsewhere = np.ones(len(dense), bool)
-    elsewhere[index] = False
-    assert len(index) and np.allclose(values, dense[index], rtol=1e-14, atol=0.0)
-    assert not dense[elsewhere].any()
+    assert_sparse_tangent(contact)
 
 
 @pytest.mark.parametrize("distribution", ["nodal", "mortar"])
@@ -434,13 +439,7 @@ def test_jacobian_mortar_in_3d_matches_central_differences(mu):
           f"{sorted(statuses(contact))}")
     assert ({1, 2} if mu > 0 else {2}) <= statuses(contact)
     assert err < 1e-7
-    # the sparse form of the tangent (the one-pass fill's) holds the dense one's values
-    index, values = contact.coupling_entries()
-    dense = contact.coupling_values()
-    elsewhere = np.ones(len(dense), bool)
-    elsewhere[index] = False
-    assert len(index) and np.allclose(values, dense[index], rtol=1e-14, atol=0.0)
-    assert not dense[elsewhere].any()
+    assert_sparse_tangent(contact)
 
 
 def circle_distance(center, radius):
