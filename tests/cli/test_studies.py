@@ -302,19 +302,21 @@ def test_killed_run_draws_what_is_there(can_render, fields_run, workdir):
 
 def test_sweep_interrupted_keeps_a_whole_table(workdir):
     """Ctrl-C (SIGINT to the process group, as a terminal sends it) after the first point:
-    exit 130, one line, sweep.csv whole with the points that ended (interrupted ones too)."""
+    exit 130, one line, sweep.csv whole with the points that ended (interrupted ones too).
+    The points after the first take 400 increments, so that some are still running when
+    the signal comes (with 50, warm workers on Debian sid had ended all six by then)."""
     import os
     import signal
     import time
     d = workdir / "interrupted"
     proc = subprocess.Popen([sys.executable, "-m", "dolfinx_friction", "sweep",
                              str(workdir / "swept.toml"), "--set", "contact.0.mu=0.1,0.2,0.3",
-                             "--set", "step.1.increments=3,50", "-j", "2", "--out", str(d),
+                             "--set", "step.1.increments=3,400", "-j", "2", "--out", str(d),
                              "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, env=cli_env(), start_new_session=True)
     deadline = time.monotonic() + 120
     while not (d / "sweep.csv").exists() and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.2)
+        time.sleep(0.05)
     os.killpg(proc.pid, signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=120)
     out = Outcome(proc.args, proc.returncode, stdout, stderr)
