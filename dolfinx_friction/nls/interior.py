@@ -62,7 +62,8 @@ class Interior:
     def __init__(self, prefix: str):
         self._prefix = prefix
         self._key: Optional[tuple] = None  # (constrained, interior) the set-up is for
-        self._usable = False
+        #: the path is taken for the rows of the last :meth:`set_up`
+        self.usable = False
         self._ksp: Optional[PETSc.KSP] = None
         self._pattern: Optional[tuple] = None  # (J, its non-zeros) the matrix was made for
         self._B: Optional[PETSc.Mat] = None
@@ -77,7 +78,7 @@ class Interior:
         if key is None or not (np.array_equal(key[0], constrained)
                                and np.array_equal(key[1], interior)):
             self._make(J, constrained, interior)
-        return self._usable
+        return self.usable
 
     def _make(self, J: PETSc.Mat, constrained: np.ndarray, interior: np.ndarray) -> None:
         """:meth:`set_up` for new rows."""
@@ -92,8 +93,8 @@ class Interior:
         coupled_rows = _csr_block(indptr, cols, self.P, in_I)[0]  # K_PI's rows
         coupled_cols = _csr_block(indptr, cols, self.I, in_P)[1]  # K_IP's columns
         self.S = np.union1d(coupled_rows, coupled_cols)  # positions in P coupled to I
-        self._usable = (len(self.I) > 0 and len(self.S) ** 2 <= SHARE * len(cols))
-        if not self._usable:
+        self.usable = (len(self.I) > 0 and len(self.S) ** 2 <= SHARE * len(cols))
+        if not self.usable:
             return
         comm = PETSc.COMM_SELF
         for old in (self.K_SI, self.K_IS):
@@ -122,7 +123,7 @@ class Interior:
         except PETSc.Error:
             failed = True
         if failed:  # K_II singular: a part of a linear body held by nothing but I
-            self._usable = False
+            self.usable = False
             K_II.destroy()
             return
         ptr, col, val = self.K_IS.getValuesCSR()
@@ -200,13 +201,10 @@ class Interior:
         return self._B
 
     def solve(self, solve: Callable, J: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec,
-              constrained: np.ndarray, interior: np.ndarray, again: bool = False
-              ) -> Optional[bool]:
-        """``solve(A, b, x)`` on the condensed system, then ``x`` in every row; None (``x``
-        untouched) where the path is not taken (``D`` too large, no interior).  ``again``:
-        with the condensed matrix of the last call as it was (not refilled from ``J``)."""
-        if not (self._usable if again else self.set_up(J, constrained, interior)):
-            return None
+              again: bool = False) -> bool:
+        """``solve(A, b, x)`` on the condensed system, then ``x`` in every row; after a
+        :meth:`set_up` for ``J``'s rows that took the path.  ``again``: with the condensed
+        matrix of the last call as it was (not refilled from ``J``)."""
         B = self._B if again else self._matrix(J)
         bv = b.getArray(readonly=True)
         self._rI.setArray(bv[self.I])

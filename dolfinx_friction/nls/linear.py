@@ -315,12 +315,11 @@ class LinearSolver:
     def _restricted(self, solve, J, b, x, constrained, constant, again: bool) -> bool:
         """``solve(A, b_, x_)`` on the free rows, with the linear interior condensed out
         where that path is taken; ``again``: with the matrices of the last call."""
-        if constant is not None and len(constant):
-            if not again and self._interior.set_up(J, constrained, constant):
-                self._written += write_options(self.ksp.getOptionsPrefix(), CONDENSED_ORDERING)
-            ok = self._interior.solve(solve, J, b, x, constrained, constant, again)
-            if ok is not None:
-                return ok
+        interior = self._interior
+        if constant is not None and len(constant) and (
+                interior.usable if again else interior.set_up(J, constrained, constant)):
+            self._written += write_options(self.ksp.getOptionsPrefix(), CONDENSED_ORDERING)
+            return interior.solve(solve, J, b, x, again)
         return self._free_rows.solve(solve, J, b, x, constrained, again)
 
     def _back_solve(self, b: PETSc.Vec, x: PETSc.Vec) -> bool:
