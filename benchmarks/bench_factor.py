@@ -15,7 +15,10 @@ factorisation and back-solve, what a Newton iteration with an unchanged pattern 
 CPU seconds, least over ``--repeats``; the relative residual of each solve is checked
 (<= 1e-10).  The crossover (the largest size at which PETSc's LU, nested-dissection
 ordering, costs no more than MUMPS in the repeated solve) sets
-:data:`dolfinx_friction.nls.defaults.NATIVE_MAX_DOFS`.
+:data:`dolfinx_friction.nls.defaults.NATIVE_MAX_DOFS`.  A back-solve with the
+factorisation kept (the mean of :data:`BACK_SOLVES`) prices a factorisation kept for a run:
+the largest size at which PETSc's dearer first solve pays within :data:`PAYBACK_SOLVES`
+back-solves sets :data:`dolfinx_friction.nls.defaults.KEPT_NATIVE_MAX_DOFS`.
 """
 from __future__ import annotations
 
@@ -39,6 +42,8 @@ SOLVERS = {  # name: (pc_type, solver package, ordering)
 }
 SIZES = {2: [6, 10, 16, 24, 36, 54, 80], 3: [2, 3, 4, 5, 6, 8, 10, 12]}
 QUICK = {2: [10, 24], 3: [3, 6]}
+#: back-solves timed (with the factorisation kept) per repeat
+BACK_SOLVES = 20
 
 
 def stiffness(gdim: int, n: int):
@@ -87,14 +92,16 @@ def unsymmetric(K, rows: np.ndarray, seed: int = 0):
                                  comm=PETSc.COMM_SELF)
 
 
-def time_solver(A, pc_type: str, package: str, ordering, repeats: int) -> tuple[float, float]:
-    """(first, repeated) CPU seconds of a solve of ``A`` by a ``preonly`` KSP."""
+def time_solver(A, pc_type: str, package: str, ordering, repeats: int
+                ) -> tuple[float, float, float]:
+    """(first, repeated, back-solve) CPU seconds of a solve of ``A`` by a ``preonly`` KSP;
+    back-solve: a solve with the factorisation kept (the mean of :data:`BACK_SOLVES`)."""
     from petsc4py import PETSc
     b = A.createVecLeft()
     b.setRandom()
     x = b.duplicate()
     r = b.duplicate()
-    first, again = [], []
+    first, again, back = [], [], []
     for _ in range(repeats):
         M = A.copy()
         ksp = PETSc.KSP().create(PETSc.COMM_SELF)
@@ -114,9 +121,13 @@ def time_solver(A, pc_type: str, package: str, ordering, repeats: int) -> tuple[
         ksp.solve(b, x)
         again.append(time.process_time() - t)
         check(M, b, x, r)
+        t = time.process_time()
+        for _ in range(BACK_SOLVES):
+            ksp.solve(b, x)
+        back.append((time.process_time() - t) / BACK_SOLVES)
         ksp.destroy()
         M.destroy()
-    return min(first), min(again)
+    return min(first), min(again), min(back)
 
 
 def check(A, b, x, r) -> None:
@@ -149,11 +160,12 @@ def main(argv=None) -> None:
                 for name, (pc_type, package, ordering) in SOLVERS.items():
                     if case == "unsymmetric" and pc_type == "cholesky":
                         continue
-                    first, again = time_solver(A, pc_type, package, ordering,
-                                               args.repeats)
-                    data.setdefault((gdim, case, name), []).append((dofs, first, again))
+                    first, again, back = time_solver(A, pc_type, package, ordering,
+                                                     args.repeats)
+                    data.setdefault((gdim, case, name), []).append((dofs, first, again,
+                                                                    back))
                     print(f"{gdim}D", case, f"{dofs:,}", name, f"{1e3 * first:.2f}",
-                          f"{1e3 * again:.2f}", flush=True)
+                          f"{1e3 * again:.2f}", f"{1e3 * back:.3f}", flush=True)
     report(data, sorted(sizes), machine, B.load_average(), args.repeats,
            args.no_results)
 
@@ -169,11 +181,35 @@ def pivot(data: dict) -> list[list]:
             if not hit:
                 row.append("-")
                 continue
-            _, first, again = hit[0]
+            _, first, again, _ = hit[0]
             row.append(f"{1e3 * again:.2f}" + (f" ({1e3 * first:.2f})"
                                                if name in ("MUMPS LU", "PETSc LU nd") else ""))
         rows.append(row)
     return rows
+
+
+def payback(data: dict, gdim: int) -> tuple[list[list], int]:
+    """The rows of the kept-factorisation table (symmetric stiffness, MUMPS LU against
+    PETSc's LU nd: first solve, back-solve, the back-solves after which PETSc's dearer
+    first solve has paid for itself) and the largest size where it pays within
+    :data:`PAYBACK_SOLVES` back-solves."""
+    mumps = data[(gdim, "symmetric", "MUMPS LU")]
+    native = data[(gdim, "symmetric", "PETSc LU nd")]
+    rows, largest = [], 0
+    for m, p in zip(mumps, native):
+        saved, extra = m[3] - p[3], p[1] - m[1]
+        solves = 0.0 if extra <= 0.0 else (np.inf if saved <= 0.0 else extra / saved)
+        if solves <= PAYBACK_SOLVES:
+            largest = m[0]
+        rows.append([f"{gdim}D", f"{m[0]:,}", f"{1e3 * m[1]:.2f}", f"{1e3 * p[1]:.2f}",
+                     f"{1e3 * m[3]:.3f}", f"{1e3 * p[3]:.3f}",
+                     "never" if solves == np.inf else f"{solves:.0f}"])
+    return rows, largest
+
+
+#: back-solves a run's kept factorisation is expected to serve (the Newton iterations of
+#: the finite-strain comparisons in RESULTS.md: 45 to 130)
+PAYBACK_SOLVES = 50
 
 
 def report(data: dict, dims: list, machine: dict, load1: float, repeats: int,
@@ -215,6 +251,18 @@ def report(data: dict, dims: list, machine: dict, load1: float, repeats: int,
             + B.table(["dim", "matrix", "dofs", *SOLVERS], pivot(data))
             + "\n\nPETSc's LU (nd) costs no more than MUMPS's (repeated, unsymmetric) up to "
             + ", ".join(f"{crossover[g]:,} dofs in {g}D" for g in dims) + "." + note)
+    kept = [payback(data, g) for g in dims]
+    text += ("\n\nA factorisation kept for a whole run (the constant interior `K_II` of "
+             "`nls/interior.py`: factorised once, back-solved at every Newton step): the "
+             "symmetric stiffness's first solve and one back-solve [ms] (mean of "
+             f"{BACK_SOLVES}), and the back-solves after which PETSc's dearer first solve "
+             "has paid for itself (0: it is the cheaper one):\n\n"
+             + B.table(["dim", "dofs", "MUMPS first", "PETSc nd first", "MUMPS back-solve",
+                        "PETSc nd back-solve", "pays after"],
+                       [r for rows, _ in kept for r in rows])
+             + f"\n\nWithin {PAYBACK_SOLVES} back-solves PETSc's pays up to "
+             + ", ".join(f"{largest:,} dofs in {g}D" for g, (_, largest) in zip(dims, kept))
+             + ".")
     print(text)
     if not no_results:
         B.write_section("Direct solvers of small systems: MUMPS against PETSc's own", text)

@@ -18,6 +18,12 @@ factorisation (no more memory): then ``x_I = y_I - Z x_S`` with ``y_I = K_II^-1 
 back-solve of ``K_II`` per step instead of two (the product is 4-16x faster than a
 back-solve reading as many factor entries: 0.006 against 0.098 ms on the press + shear
 block of benchmarks/bench_ccx_nlgeom.py, 0.078 against 0.334 ms at 350k entries).
+``K_II`` is factorised by PETSc's own LU (nested dissection) up to
+:data:`~dolfinx_friction.nls.defaults.KEPT_NATIVE_MAX_DOFS` rows, else by MUMPS
+(:func:`~dolfinx_friction.nls.defaults.factorisation` with ``kept``): its back-solves, one
+per step, then carry no fixed cost of MUMPS's (0.017 against 0.095 ms on the 432 rows of
+the press + shear block).  Options under the solver's prefix plus ``interior_`` (e.g.
+``interior_pc_factor_mat_solver_type``) choose otherwise.
 """
 from __future__ import annotations
 
@@ -27,6 +33,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from dolfinx_friction.fem.pattern import csr_values
+from dolfinx_friction.nls.defaults import factorisation
 
 __all__ = ["Interior", "factor_entries"]
 
@@ -50,9 +57,24 @@ def _csr_block(indptr: np.ndarray, cols: np.ndarray, rows: np.ndarray, position:
 
 
 def factor_entries(F: PETSc.Mat) -> float:
-    """Entries of a MUMPS factorisation (at least 1)."""
+    """Entries of a factorisation (at least 1): MUMPS's ``INFOG(20)``, else the factor's."""
+    if F.getType() != "mumps":
+        return max(F.getInfo()["nz_used"], 1.0)
     entries = F.getMumpsInfog(20)  # negative: millions
     return max(entries if entries >= 0 else -entries * 1e6, 1.0)
+
+
+def _factorised(ksp: PETSc.KSP) -> bool:
+    """Whether ``ksp`` (a factorisation) factorised its operator: a solve that did not fail
+    (MUMPS's negative ``INFOG(1)``, PETSc's zero pivot or missing diagonal)."""
+    try:
+        ksp.setUp()
+        b, x = ksp.getOperators()[0].createVecs()
+        b.set(1.0)
+        ksp.solve(b, x)
+        return ksp.getConvergedReason() > 0 and bool(np.isfinite(x.norm()))
+    except PETSc.Error:
+        return False
 
 
 class Interior:
@@ -70,6 +92,8 @@ class Interior:
         self.K_SI: Optional[PETSc.Mat] = None
         self.K_IS: Optional[PETSc.Mat] = None
         self.Z: Optional[np.ndarray] = None  # K_II^-1 K_IS (|I|, |S|), where kept
+        #: the package that factorised ``K_II`` ("" before a set-up that took the path)
+        self.package = ""
 
     def set_up(self, J: PETSc.Mat, constrained: np.ndarray, interior: np.ndarray) -> bool:
         """Factorise ``K_II``, compute ``D`` (when the rows changed); whether the path is
@@ -109,23 +133,19 @@ class Interior:
         srows.destroy()
         if self._ksp is not None:
             self._ksp.destroy()
-        self._ksp = PETSc.KSP().create(comm)
-        self._ksp.setOptionsPrefix(self._prefix + "interior_")
-        self._ksp.setType("preonly")
-        self._ksp.getPC().setType("lu")
-        self._ksp.getPC().setFactorSolverType("mumps")
-        self._ksp.setFromOptions()
-        self._ksp.setOperators(K_II, K_II)
-        try:
-            self._ksp.setUp()
-            F = self._ksp.getPC().getFactorMatrix()
-            failed = F.getMumpsInfog(1) < 0
-        except PETSc.Error:
-            failed = True
-        if failed:  # K_II singular: a part of a linear body held by nothing but I
+        gdim = J.getBlockSize() if J.getBlockSize() in (2, 3) else 3  # (the Jacobian's: gdim)
+        chosen = factorisation(len(self.I), gdim, 1, kept=True)
+        # PETSc's LU does not pivot: MUMPS factorises what it could not
+        for package in dict.fromkeys((chosen, "mumps")):
+            self._ksp = self._factorise(K_II, package)
+            if self._ksp is not None:
+                break
+        if self._ksp is None:  # K_II singular: a part of a linear body held by I only
             self.usable = False
             K_II.destroy()
             return
+        F = self._ksp.getPC().getFactorMatrix()
+        self.package = self._ksp.getPC().getFactorSolverType()
         ptr, col, val = self.K_IS.getValuesCSR()
         row = np.repeat(np.arange(len(self.I)), np.diff(ptr))
         D = np.zeros((len(self.S), len(self.S)))
@@ -151,6 +171,24 @@ class Interior:
         self.D = D
         self._yI, self._rS = self.K_SI.createVecs()  # sizes |I|, |S|
         self._xS, self._rI = self.K_IS.createVecs()  # sizes |S|, |I|
+
+    def _factorise(self, K: PETSc.Mat, package: str) -> Optional[PETSc.KSP]:
+        """A ``preonly`` LU of ``K`` by ``package`` (the options under the prefix plus
+        ``interior_`` win); None where it failed."""
+        ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+        ksp.setOptionsPrefix(self._prefix + "interior_")
+        ksp.setType("preonly")
+        pc = ksp.getPC()
+        pc.setType("lu")
+        pc.setFactorSolverType(package)
+        if package == "petsc":
+            pc.setFactorOrdering("nd")
+        ksp.setFromOptions()
+        ksp.setOperators(K, K)
+        if _factorised(ksp):
+            return ksp
+        ksp.destroy()
+        return None
 
     def destroy(self) -> None:
         """Destroy its factorisation, matrices and vectors; the next solve sets up afresh."""

@@ -189,6 +189,8 @@ class LinearSolver:
         self.chord_solves = 0
         #: MUMPS's ordering in its last fresh factorisation (:data:`MUMPS_ORDERINGS`)
         self._ordering = ""
+        #: the package that factorised the condensed-out interior, once that path was taken
+        self._interior_package = ""
 
     def _configured(self, comm, reuse: bool) -> PETSc.KSP:
         """A KSP with this solver's defaults and options under a prefix of its own."""
@@ -214,7 +216,9 @@ class LinearSolver:
         """The solver in use: ``ksp_type`` (``gmres`` on a kept factorisation, when one is
         kept), ``pc_type``, ``factor_solver_type`` (factorisations only), ``ordering``
         (PETSc's; MUMPS's in its last fresh factorisation, once there was one),
-        ``reuse_factorisation``."""
+        ``reuse_factorisation``; ``interior_factor_solver_type``, once the linear bodies'
+        interior was condensed out (:class:`~dolfinx_friction.nls.interior.Interior`): the
+        package that factorised it."""
         pc = self.ksp.getPC()
         out = {"ksp_type": "gmres" if self.reuse else self.ksp.getType(),
                "pc_type": pc.getType()}
@@ -226,6 +230,8 @@ class LinearSolver:
             elif self._ordering:
                 out["ordering"] = self._ordering
         out["reuse_factorisation"] = self.reuse
+        if self._interior_package:
+            out["interior_factor_solver_type"] = self._interior_package
         return out
 
     def release(self) -> None:
@@ -319,6 +325,7 @@ class LinearSolver:
         if constant is not None and len(constant) and (
                 interior.usable if again else interior.set_up(J, constrained, constant)):
             self._written += write_options(self.ksp.getOptionsPrefix(), CONDENSED_ORDERING)
+            self._interior_package = interior.package
             return interior.solve(solve, J, b, x, again)
         return self._free_rows.solve(solve, J, b, x, constrained, again)
 

@@ -388,8 +388,9 @@ def test_factorisation_on_the_free_rows_gives_the_whole_systems_step(shared_dir)
     """A Neo-Hookean block on a linear foundation, off equilibrium: a factorisation given
     the constrained rows solves on the others only (a matrix of the free rows' size), and
     given also the foundation's interior (serial: the rows off the contact surface)
-    condenses it out (a matrix of the other free rows' size); both give the step of the
-    whole system's factorisation, zero in the constrained rows.  Under MPI the interior
+    condenses it out (a matrix of the other free rows' size), its 432 rows factorised by
+    PETSc's LU or, asked by the options under ``interior_``, MUMPS; all give the step of
+    the whole system's factorisation, zero in the constrained rows.  Under MPI the interior
     is empty: the free rows' solve."""
     scene = cases.press_shear_scene(meshes.blocks_on_foundation(shared_dir / "blocks.msh"))
     _, solver = _solve(scene)
@@ -407,16 +408,25 @@ def test_factorisation_on_the_free_rows_gives_the_whole_systems_step(shared_dir)
     count = system.comm.allreduce
     assert (count(len(interior)) > 0) == (system.comm.size == 1)
     held = count(len(system.constrained_rows))
-    steps = []
-    for constrained, constant, size in (
-            (None, None, system.x.getSize()),
-            (system.constrained_rows, None, system.x.getSize() - held),
-            (system.constrained_rows, interior,
-             system.x.getSize() - held - count(len(interior)))):
+    steps, packages = [], []
+    rows, n_free = system.constrained_rows, system.x.getSize() - held
+    database, name = PETSc.Options(), "dolfinx_friction_interior_pc_factor_mat_solver_type"
+    for constrained, constant, size, package in (
+            (None, None, system.x.getSize(), None), (rows, None, n_free, None),
+            (rows, interior, n_free - count(len(interior)), None),
+            (rows, interior, n_free - count(len(interior)), "mumps")):
+        if package:
+            database[name] = package
         linear, dx = LinearSolver(system.comm, reuse=False), system.x.duplicate()
-        assert linear.solve(J, system.b, dx, constrained=constrained, constant=constant)
+        try:
+            assert linear.solve(J, system.b, dx, constrained=constrained, constant=constant)
+        finally:
+            database.delValue(name)
         steps.append(dx.getArray().copy())
+        packages.append(linear.settings().get("interior_factor_solver_type"))
         assert linear.ksp.getOperators()[0].getSize()[0] == size
+    assert packages == [None, None, *(["petsc", "mumps"] if system.comm.size == 1
+                                      else [None, None])]
     whole = steps[0]
     scale = system.comm.allreduce(np.abs(whole).max(), op=MPI.MAX)
     for reduced in steps[1:]:
