@@ -52,15 +52,15 @@ def choose(kind: str, dofs: int, gdim: int, direct_max_dofs: Optional[int] = Non
 #: PETSc's unblocked elimination loses to MUMPS's dense fronts as they grow, the sooner in
 #: 3D (benchmarks/RESULTS.md, "Direct solvers of small systems": numeric factorisation and
 #: solve of an elastic stiffness, unsymmetric / symmetric (Cholesky against LDL^T), 2D:
-#: 3.1 / 2.4 ms against 3.7 / 2.8 at 2,664 dofs, 11.3 / 7.9 against 9.1 / 7.0 at 5,940;
+#: 3.1 / 2.3 ms against 3.7 / 2.7 at 2,664 dofs, 11.4 / 7.9 against 9.4 / 7.1 at 5,940;
 #: 3D: 0.55 against 0.84 ms at 300 dofs, 2.3 against 1.8 at 540)
 NATIVE_MAX_DOFS = {2: 3_000, 3: 400}
 #: the same for a matrix factorised once and back-solved at every Newton step of a run
 #: (the linear bodies' interior of :mod:`~dolfinx_friction.nls.interior`): MUMPS's
 #: back-solve carries a fixed cost PETSc's lacks (0.078 against 0.010 ms at 300 3D dofs,
 #: 0.43 against 0.07 at 2,664 2D dofs), and PETSc's dearer first factorisation has paid
-#: for itself within 50 back-solves up to 12,960 2D and 882 3D dofs (after 126 at 1,944
-#: 3D dofs, 271 at 3,630: benchmarks/RESULTS.md, "Direct solvers of small systems")
+#: for itself within 50 back-solves up to 12,960 2D and 882 3D dofs (after 123 at 1,944
+#: 3D dofs, 498 at 3,630: benchmarks/RESULTS.md, "Direct solvers of small systems")
 KEPT_NATIVE_MAX_DOFS = {2: 13_000, 3: 900}
 
 
