@@ -67,14 +67,16 @@ def factor_entries(F: PETSc.Mat) -> float:
 def _factorised(ksp: PETSc.KSP) -> bool:
     """Whether ``ksp`` (a factorisation) factorised its operator: a solve that did not fail
     (MUMPS's negative ``INFOG(1)``, PETSc's zero pivot or missing diagonal)."""
+    b, x = ksp.getOperators()[0].createVecs()
     try:
-        ksp.setUp()
-        b, x = ksp.getOperators()[0].createVecs()
         b.set(1.0)
         ksp.solve(b, x)
         return ksp.getConvergedReason() > 0 and bool(np.isfinite(x.norm()))
     except PETSc.Error:
         return False
+    finally:
+        b.destroy()
+        x.destroy()
 
 
 class Interior:

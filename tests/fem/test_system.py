@@ -431,7 +431,8 @@ def test_factorisation_on_the_free_rows_gives_the_whole_systems_step(shared_dir)
     scale = system.comm.allreduce(np.abs(whole).max(), op=MPI.MAX)
     for reduced in steps[1:]:
         assert not reduced[system.constrained_rows].any()
-        np.testing.assert_allclose(reduced, whole, atol=1e-10 * scale)  # measured: 1.7e-15
+        # measured <= 2.2e-15 (1, 2, 3 ranks; the interior by PETSc's LU or MUMPS)
+        np.testing.assert_allclose(reduced, whole, atol=1e-13 * scale)
 
 
 def test_live_solvers_keep_their_own_options(shared_dir):
